@@ -1,0 +1,353 @@
+#include <tdf/io/image_io.h>
+
+#include <tdf/core/atomic_file.h>
+#include <tdf/core/error.h>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfCompression.h>
+#include <Iex.h>
+#include <jpeglib.h>
+#include <png.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <csetjmp>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+
+namespace tdf {
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+namespace {
+
+struct FileCloser {
+    void operator()(std::FILE* f) const {
+        if (f) std::fclose(f);
+    }
+};
+using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
+
+FilePtr open_file(const std::string& path, const char* mode) {
+    FilePtr f(std::fopen(path.c_str(), mode));
+    if (!f) throw_error("cannot open '{}': {}", path, std::strerror(errno));
+    return f;
+}
+
+// ---- PNG -------------------------------------------------------------------------------------
+
+struct PngErrorContext {
+    std::string path;
+    std::string message;
+};
+
+void png_error_handler(png_structp png, png_const_charp message) {
+    auto* context = static_cast<PngErrorContext*>(png_get_error_ptr(png));
+    context->message = message;
+    png_longjmp(png, 1);
+}
+void png_warning_handler(png_structp, png_const_charp) {}
+
+Image read_png(const std::string& path) {
+    FilePtr file = open_file(path, "rb");
+    PngErrorContext context{path, {}};
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler,
+                                             png_warning_handler);
+    png_infop info = png_create_info_struct(png);
+    Image image;
+    std::vector<png_bytep> rows;
+    std::vector<unsigned char> buffer;
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_read_struct(&png, &info, nullptr);
+        throw_error("cannot read PNG '{}': {}", path, context.message);
+    }
+    png_init_io(png, file.get());
+    png_read_info(png, info);
+    const png_uint_32 width = png_get_image_width(png, info);
+    const png_uint_32 height = png_get_image_height(png, info);
+    const int color_type = png_get_color_type(png, info);
+    int bit_depth = png_get_bit_depth(png, info);
+    if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
+    if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
+    if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
+    if (bit_depth == 16) png_set_swap(png);  // little-endian host order
+    png_read_update_info(png, info);
+    const int channels = png_get_channels(png, info);
+    bit_depth = png_get_bit_depth(png, info);
+    const std::size_t row_bytes = png_get_rowbytes(png, info);
+    buffer.resize(row_bytes * height);
+    rows.resize(height);
+    for (png_uint_32 y = 0; y < height; ++y) rows[y] = buffer.data() + y * row_bytes;
+    png_read_image(png, rows.data());
+    png_read_end(png, nullptr);
+    png_destroy_read_struct(&png, &info, nullptr);
+
+    image = Image(int(width), int(height), channels);
+    float* out = image.data();
+    const std::size_t count = std::size_t(width) * height * std::size_t(channels);
+    if (bit_depth == 16) {
+        const auto* in = reinterpret_cast<const std::uint16_t*>(buffer.data());
+        for (std::size_t i = 0; i < count; ++i) out[i] = float(in[i]) / 65535.0f;
+    } else {
+        for (std::size_t i = 0; i < count; ++i) out[i] = float(buffer[i]) / 255.0f;
+    }
+    return image;
+}
+
+std::uint32_t quantize_value(float v, float max_value, Quantize q) {
+    if (!(v >= 0.0f)) v = 0.0f;  // also maps NaN to 0
+    v = std::min(v, 1.0f) * max_value;
+    return std::uint32_t(q == Quantize::Round ? std::floor(v + 0.5f) : std::floor(v));
+}
+
+void write_png_file(const std::string& path, const Image& image, int bits, Quantize quantize) {
+    FilePtr file = open_file(path, "wb");
+    PngErrorContext context{path, {}};
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler,
+                                              png_warning_handler);
+    png_infop info = png_create_info_struct(png);
+    const int channels = image.channels();
+    const int color_types[] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
+                               PNG_COLOR_TYPE_RGBA};
+    const std::size_t row_values = std::size_t(image.width()) * std::size_t(channels);
+    std::vector<unsigned char> row(row_values * std::size_t(bits / 8));
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        throw_error("cannot write PNG '{}': {}", path, context.message);
+    }
+    png_init_io(png, file.get());
+    png_set_IHDR(png, info, png_uint_32(image.width()), png_uint_32(image.height()), bits,
+                 color_types[channels], PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
+    png_set_compression_level(png, 6);
+    png_write_info(png, info);
+    const float max_value = bits == 16 ? 65535.0f : 255.0f;
+    for (int y = 0; y < image.height(); ++y) {
+        const float* in = image.pixel(0, y);
+        for (std::size_t i = 0; i < row_values; ++i) {
+            const std::uint32_t q = quantize_value(in[i], max_value, quantize);
+            if (bits == 16) {
+                row[2 * i] = static_cast<unsigned char>(q >> 8);  // PNG is big-endian
+                row[2 * i + 1] = static_cast<unsigned char>(q & 0xff);
+            } else {
+                row[i] = static_cast<unsigned char>(q);
+            }
+        }
+        png_write_row(png, row.data());
+    }
+    png_write_end(png, nullptr);
+    png_destroy_write_struct(&png, &info);
+    if (std::fflush(file.get()) != 0 || std::ferror(file.get()))
+        throw_error("cannot write PNG '{}': {} (disk full?)", path, std::strerror(errno));
+}
+
+// ---- JPEG ------------------------------------------------------------------------------------
+
+struct JpegError {
+    jpeg_error_mgr base;
+    std::jmp_buf jump;
+    char message[JMSG_LENGTH_MAX];
+};
+
+void jpeg_error_exit(j_common_ptr cinfo) {
+    auto* err = reinterpret_cast<JpegError*>(cinfo->err);
+    (*cinfo->err->format_message)(cinfo, err->message);
+    std::longjmp(err->jump, 1);
+}
+
+Image read_jpeg(const std::string& path) {
+    FilePtr file = open_file(path, "rb");
+    jpeg_decompress_struct cinfo;
+    JpegError err;
+    cinfo.err = jpeg_std_error(&err.base);
+    err.base.error_exit = jpeg_error_exit;
+    std::vector<unsigned char> buffer;
+    if (setjmp(err.jump)) {
+        jpeg_destroy_decompress(&cinfo);
+        throw_error("cannot read JPEG '{}': {}", path, err.message);
+    }
+    jpeg_create_decompress(&cinfo);
+    jpeg_stdio_src(&cinfo, file.get());
+    jpeg_read_header(&cinfo, TRUE);
+    if (cinfo.num_components != 1) cinfo.out_color_space = JCS_RGB;
+    jpeg_start_decompress(&cinfo);
+    const int width = int(cinfo.output_width), height = int(cinfo.output_height);
+    const int channels = int(cinfo.output_components);
+    buffer.resize(std::size_t(width) * std::size_t(height) * std::size_t(channels));
+    while (cinfo.output_scanline < cinfo.output_height) {
+        JSAMPROW row = buffer.data() + std::size_t(cinfo.output_scanline) * std::size_t(width) * std::size_t(channels);
+        jpeg_read_scanlines(&cinfo, &row, 1);
+    }
+    jpeg_finish_decompress(&cinfo);
+    jpeg_destroy_decompress(&cinfo);
+    Image image(width, height, channels);
+    for (std::size_t i = 0; i < buffer.size(); ++i) image.data()[i] = float(buffer[i]) / 255.0f;
+    return image;
+}
+
+// ---- EXR -------------------------------------------------------------------------------------
+
+std::vector<std::string> default_channel_names(int channels) {
+    switch (channels) {
+        case 1: return {"Y"};
+        case 2: return {"Y", "A"};
+        case 3: return {"R", "G", "B"};
+        case 4: return {"R", "G", "B", "A"};
+        default: {
+            std::vector<std::string> names;
+            for (int c = 0; c < channels; ++c) names.push_back("C" + std::to_string(c));
+            return names;
+        }
+    }
+}
+
+// Order channels of one layer the way a user expects (R,G,B,A / X,Y,Z / U,V,W), not alphabetically.
+int channel_rank(const std::string& name) {
+    static const char* order[] = {"R", "G", "B", "A", "X", "Y", "Z", "U", "V", "W"};
+    for (int i = 0; i < 10; ++i)
+        if (name == order[i]) return i;
+    return 100;
+}
+
+}  // namespace
+
+Image read_image(const std::string& path) {
+    if (!std::filesystem::exists(path)) throw_error("cannot open '{}': no such file", path);
+    unsigned char magic[4] = {0, 0, 0, 0};
+    {
+        FilePtr file = open_file(path, "rb");
+        if (std::fread(magic, 1, 4, file.get()) != 4) throw_error("cannot read image '{}': file is too short", path);
+    }
+    if (magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') return read_png(path);
+    if (magic[0] == 0xFF && magic[1] == 0xD8) return read_jpeg(path);
+    if (magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) {
+        std::vector<ExrLayer> layers = read_exr_layers(path);
+        int channels = 0;
+        for (const auto& l : layers) channels += l.image.channels();
+        Image out(layers[0].image.width(), layers[0].image.height(), channels);
+        int offset = 0;
+        for (const auto& layer : layers) {
+            for (std::size_t p = 0; p < out.pixel_count(); ++p)
+                for (int c = 0; c < layer.image.channels(); ++c)
+                    out.data()[p * std::size_t(channels) + std::size_t(offset + c)] =
+                        layer.image.data()[p * std::size_t(layer.image.channels()) + std::size_t(c)];
+            offset += layer.image.channels();
+        }
+        return out;
+    }
+    throw_error("cannot read image '{}': not a PNG, JPEG or OpenEXR file", path);
+}
+
+void write_png(const std::string& path, const Image& image, int bits, Quantize quantize) {
+    if (bits != 8 && bits != 16) throw_error("cannot write PNG '{}': bit depth must be 8 or 16, got {}", path, bits);
+    if (image.channels() < 1 || image.channels() > 4)
+        throw_error("cannot write PNG '{}': {} channels (1 to 4 supported)", path, image.channels());
+    if (image.empty()) throw_error("cannot write PNG '{}': the image is empty", path);
+    write_atomically(path, [&](const std::string& tmp) { write_png_file(tmp, image, bits, quantize); });
+}
+
+void write_exr(const std::string& path, const std::vector<ExrLayer>& layers, ExrPixelType type) {
+    if (layers.empty()) throw_error("cannot write EXR '{}': no layers", path);
+    const int width = layers[0].image.width(), height = layers[0].image.height();
+    if (width <= 0 || height <= 0) throw_error("cannot write EXR '{}': the image is empty", path);
+    for (const auto& layer : layers) {
+        if (layer.image.width() != width || layer.image.height() != height)
+            throw_error("cannot write EXR '{}': layer '{}' is {}x{}, expected {}x{}", path, layer.name,
+                        layer.image.width(), layer.image.height(), width, height);
+        if (int(layer.channel_names.size()) != layer.image.channels())
+            throw_error("cannot write EXR '{}': layer '{}' names {} channels but has {}", path, layer.name,
+                        layer.channel_names.size(), layer.image.channels());
+    }
+    const Imf::PixelType pixel_type = type == ExrPixelType::Half ? Imf::HALF : Imf::FLOAT;
+    write_atomically(path, [&](const std::string& tmp) {
+        try {
+            Imf::Header header(width, height);
+            header.compression() = Imf::ZIP_COMPRESSION;
+            Imf::FrameBuffer frame;
+            for (const auto& layer : layers) {
+                const int channels = layer.image.channels();
+                for (int c = 0; c < channels; ++c) {
+                    const std::string name =
+                        layer.name.empty() ? layer.channel_names[std::size_t(c)] : layer.name + "." + layer.channel_names[std::size_t(c)];
+                    header.channels().insert(name, Imf::Channel(pixel_type));
+                    // OpenEXR converts float to half on write when the channel type is HALF.
+                    frame.insert(name, Imf::Slice(Imf::FLOAT,
+                                                  reinterpret_cast<char*>(const_cast<float*>(layer.image.data() + c)),
+                                                  sizeof(float) * std::size_t(channels),
+                                                  sizeof(float) * std::size_t(channels) * std::size_t(width)));
+                }
+            }
+            Imf::OutputFile file(tmp.c_str(), header);
+            file.setFrameBuffer(frame);
+            file.writePixels(height);
+        } catch (const std::exception& e) {
+            throw_error("cannot write EXR '{}': {}", path, e.what());
+        }
+    });
+}
+
+void write_exr(const std::string& path, const Image& image, ExrPixelType type) {
+    write_exr(path, {ExrLayer{"", default_channel_names(image.channels()), image}}, type);
+}
+
+std::vector<ExrLayer> read_exr_layers(const std::string& path) {
+    if (!std::filesystem::exists(path)) throw_error("cannot open '{}': no such file", path);
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i window = file.header().dataWindow();
+        const int width = window.max.x - window.min.x + 1;
+        const int height = window.max.y - window.min.y + 1;
+        std::map<std::string, std::vector<std::string>> layer_channels;  // layer -> channel suffixes
+        std::vector<std::string> layer_order;
+        for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {
+            const std::string full = it.name();
+            const auto dot = full.rfind('.');
+            const std::string layer = dot == std::string::npos ? "" : full.substr(0, dot);
+            const std::string channel = dot == std::string::npos ? full : full.substr(dot + 1);
+            if (!layer_channels.count(layer)) layer_order.push_back(layer);
+            layer_channels[layer].push_back(channel);
+        }
+        std::vector<ExrLayer> layers;
+        Imf::FrameBuffer frame;
+        layers.reserve(layer_order.size());
+        for (const auto& name : layer_order) {
+            auto channels = layer_channels[name];
+            std::stable_sort(channels.begin(), channels.end(),
+                             [](const std::string& a, const std::string& b) { return channel_rank(a) < channel_rank(b); });
+            layers.push_back(ExrLayer{name, channels, Image(width, height, int(channels.size()))});
+        }
+        for (auto& layer : layers) {
+            const int n = layer.image.channels();
+            for (int c = 0; c < n; ++c) {
+                const std::string full = layer.name.empty() ? layer.channel_names[std::size_t(c)]
+                                                            : layer.name + "." + layer.channel_names[std::size_t(c)];
+                char* base = reinterpret_cast<char*>(layer.image.data() + c) -
+                             (std::ptrdiff_t(window.min.x) + std::ptrdiff_t(window.min.y) * width) *
+                                 std::ptrdiff_t(sizeof(float) * std::size_t(n));
+                frame.insert(full, Imf::Slice(Imf::FLOAT, base, sizeof(float) * std::size_t(n),
+                                              sizeof(float) * std::size_t(n) * std::size_t(width)));
+            }
+        }
+        file.setFrameBuffer(frame);
+        file.readPixels(window.min.y, window.max.y);
+        return layers;
+    } catch (const tdf::Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw_error("cannot read EXR '{}': {}", path, e.what());
+    }
+}
+
+}  // namespace tdf

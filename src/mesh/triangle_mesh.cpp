@@ -1,0 +1,164 @@
+#include <tdf/mesh/triangle_mesh.h>
+
+#include <tdf/core/error.h>
+
+#include <cmath>
+#include <map>
+#include <utility>
+
+namespace tdf {
+
+Bounds3 compute_bounds(const TriangleMesh& mesh) {
+    Bounds3 b;
+    if (mesh.positions.empty()) return b;
+    b.lower = b.upper = mesh.positions[0];
+    for (const Vec3f& p : mesh.positions) {
+        b.lower = min(b.lower, p);
+        b.upper = max(b.upper, p);
+    }
+    return b;
+}
+
+void compute_normals(TriangleMesh& mesh) {
+    std::vector<Vec3f> sums(mesh.positions.size(), Vec3f{0, 0, 0});
+    for (const Vec3i& t : mesh.triangles) {
+        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
+        const Vec3f face = cross(mesh.positions[std::size_t(t.y)] - p0, mesh.positions[std::size_t(t.z)] - p0);
+        for (int k = 0; k < 3; ++k) sums[std::size_t(t[k])] += face;
+    }
+    mesh.normals.resize(sums.size());
+    for (std::size_t i = 0; i < sums.size(); ++i)
+        mesh.normals[i] = length_squared(sums[i]) <= 1e-20f ? Vec3f{0, 0, 1} : safe_normalize(sums[i]);
+}
+
+namespace {
+
+// Any unit vector perpendicular to n (Duff et al. 2017 branchless basis).
+Vec3f perpendicular(Vec3f n) {
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float b = n.x * n.y * a;
+    return {1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
+}
+
+// The reference's clamped determinant (spec 3.3): |D| >= 1e-6, and D = 0 counts as negative.
+float clamp_determinant(float d) { return d > 0.0f ? std::max(d, 1e-6f) : std::min(d, -1e-6f); }
+
+}  // namespace
+
+void compute_tangents(TriangleMesh& mesh, TangentMode mode) {
+    const std::size_t face_count = mesh.triangles.size();
+    mesh.tangent_triangles.assign(face_count, Vec3i{});
+    if (!mesh.has_uvs()) {
+        // No UVs: a tangent frame still exists for tactile maps laid by other means.
+        mesh.tangents.resize(mesh.positions.size());
+        for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+            mesh.tangents[v] = Vec4f(perpendicular(mesh.normals[v]), 1.0f);
+        mesh.tangent_triangles = mesh.triangles;
+        return;
+    }
+
+    // Tangent vertices: per position (Reference) or per (position, uv) pair (Handed).
+    std::vector<int> position_of;  // tangent vertex -> position index
+    if (mode == TangentMode::Reference) {
+        mesh.tangent_triangles = mesh.triangles;
+        position_of.resize(mesh.positions.size());
+        for (std::size_t v = 0; v < position_of.size(); ++v) position_of[v] = int(v);
+    } else {
+        std::map<std::pair<int, int>, int> corner_ids;
+        for (std::size_t f = 0; f < face_count; ++f)
+            for (int k = 0; k < 3; ++k) {
+                const auto key = std::make_pair(mesh.triangles[f][k], mesh.uv_triangles[f][k]);
+                auto [it, inserted] = corner_ids.emplace(key, int(position_of.size()));
+                if (inserted) position_of.push_back(key.first);
+                mesh.tangent_triangles[f][k] = it->second;
+            }
+    }
+
+    const std::size_t n = position_of.size();
+    std::vector<Vec3f> tangent_sum(n, Vec3f{0, 0, 0});
+    std::vector<float> handedness_sum(n, 0.0f);
+    std::vector<int> face_counts(n, 0);
+    for (std::size_t f = 0; f < face_count; ++f) {
+        const Vec3i& t = mesh.triangles[f];
+        const Vec3i& ti = mesh.uv_triangles[f];
+        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
+        const Vec3f e1 = mesh.positions[std::size_t(t.y)] - p0;
+        const Vec3f e2 = mesh.positions[std::size_t(t.z)] - p0;
+        // Reference UV convention v' = 1 - v (spec 1.2): the tangent formula is written in it.
+        const Vec2f t0 = mesh.uvs[std::size_t(ti.x)], t1 = mesh.uvs[std::size_t(ti.y)], t2 = mesh.uvs[std::size_t(ti.z)];
+        const float du1 = t1.x - t0.x, dv1 = -(t1.y - t0.y);
+        const float du2 = t2.x - t0.x, dv2 = -(t2.y - t0.y);
+        const float d = clamp_determinant(du1 * dv2 - dv1 * du2);
+        const Vec3f face_tangent = (e1 * dv2 - e2 * dv1) / d;        // dP/du
+        const Vec3f face_bitangent_down = (e2 * du1 - e1 * du2) / d;  // dP/dv'
+        // Handedness: +1 when N x T points toward increasing OBJ v (= decreasing v').
+        const float side = dot(cross(cross(e1, e2), face_tangent), -face_bitangent_down);
+        for (int k = 0; k < 3; ++k) {
+            const int tv = mesh.tangent_triangles[f][k];
+            tangent_sum[std::size_t(tv)] += face_tangent;
+            handedness_sum[std::size_t(tv)] += side >= 0.0f ? 1.0f : -1.0f;
+            face_counts[std::size_t(tv)] += 1;
+        }
+    }
+    mesh.tangents.resize(n);
+    for (std::size_t v = 0; v < n; ++v) {
+        const Vec3f normal = mesh.normals[std::size_t(position_of[v])];
+        Vec3f tangent = tangent_sum[v] / float(std::max(face_counts[v], 1));
+        tangent = normalize_or_zero(tangent);
+        tangent = normalize_or_zero(tangent - normal * dot(tangent, normal));
+        if (mode == TangentMode::Handed && length_squared(tangent) == 0.0f) tangent = perpendicular(normal);
+        const float w = (mode == TangentMode::Reference || handedness_sum[v] >= 0.0f) ? 1.0f : -1.0f;
+        mesh.tangents[v] = Vec4f(tangent, w);
+    }
+}
+
+void normalize_mesh(TriangleMesh& mesh, float bound) {
+    const Bounds3 b = compute_bounds(mesh);
+    const Vec3f e = b.extent();
+    const float largest = std::max(e.x, std::max(e.y, e.z));
+    if (!(largest > 0.0f)) throw_error("{}: cannot normalise a mesh with zero extent", mesh.source_path);
+    const float scale = 2.0f * bound / largest;
+    const Vec3f c = b.center();
+    for (Vec3f& p : mesh.positions) p = (p - c) * scale;
+}
+
+std::size_t validate_mesh(const TriangleMesh& mesh, const std::string& source) {
+    if (mesh.positions.empty()) throw_error("{}: the mesh has no vertices", source);
+    if (mesh.triangles.empty()) throw_error("{}: the mesh has no faces", source);
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+        if (!is_finite(mesh.positions[i]))
+            throw_error("{}: vertex {} has a non-finite coordinate ({}, {}, {})", source, i + 1,
+                        mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z);
+    for (std::size_t i = 0; i < mesh.uvs.size(); ++i)
+        if (!std::isfinite(mesh.uvs[i].x) || !std::isfinite(mesh.uvs[i].y))
+            throw_error("{}: texture coordinate {} is not finite", source, i + 1);
+    for (std::size_t i = 0; i < mesh.colors.size(); ++i)
+        if (!is_finite(mesh.colors[i])) throw_error("{}: vertex colour {} is not finite", source, i + 1);
+    if (!mesh.colors.empty() && mesh.colors.size() != mesh.positions.size())
+        throw_error("{}: {} vertex colours for {} vertices", source, mesh.colors.size(), mesh.positions.size());
+    if (!mesh.uv_triangles.empty() && mesh.uv_triangles.size() != mesh.triangles.size())
+        throw_error("{}: {} UV faces for {} faces", source, mesh.uv_triangles.size(), mesh.triangles.size());
+    const auto n = int(mesh.positions.size());
+    const auto nt = int(mesh.uvs.size());
+    std::size_t degenerate = 0;
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+        const Vec3i& t = mesh.triangles[f];
+        for (int k = 0; k < 3; ++k)
+            if (t[k] < 0 || t[k] >= n)
+                throw_error("{}: face {} uses vertex {} but the mesh has {} vertices", source, f + 1, t[k] + 1, n);
+        if (mesh.has_uvs())
+            for (int k = 0; k < 3; ++k)
+                if (mesh.uv_triangles[f][k] < 0 || mesh.uv_triangles[f][k] >= nt)
+                    throw_error("{}: face {} uses texture coordinate {} but the mesh has {}", source, f + 1,
+                                mesh.uv_triangles[f][k] + 1, nt);
+        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
+        const Vec3f c = cross(mesh.positions[std::size_t(t.y)] - p0, mesh.positions[std::size_t(t.z)] - p0);
+        if (!(length_squared(c) > 0.0f)) ++degenerate;
+    }
+    if (degenerate == mesh.triangles.size())
+        throw_error("{}: all {} faces have zero area", source, degenerate);
+    return degenerate;
+}
+
+}  // namespace tdf

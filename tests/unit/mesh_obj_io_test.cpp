@@ -1,0 +1,83 @@
+#include <tdf/core/error.h>
+#include <tdf/mesh/mesh_io.h>
+
+#include "common/test_paths.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace tdf;
+
+namespace {
+std::string write_file(const std::string& name, const std::string& text) {
+    const std::string path = test::scratch_dir() + "/" + name;
+    std::ofstream(path) << text;
+    return path;
+}
+}  // namespace
+
+TEST(ObjIo, PolygonsNegativeIndicesAndVertexColours) {
+    const std::string path = write_file("quad.obj",
+                                        "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 1 1 1\n"
+                                        "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                                        "f -4/-4 -3/-3 -2/-2 -1/-1\n");
+    const TriangleMesh mesh = load_obj(path);
+    ASSERT_EQ(mesh.triangles.size(), 2u);
+    EXPECT_EQ(mesh.triangles[1].z, 3);
+    ASSERT_TRUE(mesh.has_colors());
+    EXPECT_FLOAT_EQ(mesh.colors[1].y, 1.0f);
+    // Flat quad facing +Z: normals +Z, tangent +X (dP/du), right-handed (w = +1).
+    EXPECT_NEAR(mesh.normals[0].z, 1.0f, 1e-6f);
+    const Vec4f t = mesh.tangents[std::size_t(mesh.tangent_triangles[0].x)];
+    EXPECT_NEAR(t.x, 1.0f, 1e-6f);
+    EXPECT_FLOAT_EQ(t.w, 1.0f);
+}
+
+TEST(ObjIo, MirroredChartGetsNegativeHandedness) {
+    // Same quad with u mirrored: dP/du = -X and N x T = -Y but v still increases along +Y.
+    const std::string path = write_file("mirrored.obj",
+                                        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                        "vt 1 0\nvt 0 0\nvt 0 1\nvt 1 1\nf 1/1 2/2 3/3 4/4\n");
+    const TriangleMesh mesh = load_obj(path);
+    const Vec4f t = mesh.tangents[std::size_t(mesh.tangent_triangles[0].x)];
+    EXPECT_NEAR(t.x, -1.0f, 1e-6f);
+    EXPECT_FLOAT_EQ(t.w, -1.0f);
+    MeshLoadOptions reference;
+    reference.tangent_mode = TangentMode::Reference;
+    EXPECT_FLOAT_EQ(load_obj(path, reference).tangents[0].w, 1.0f);
+}
+
+TEST(ObjIo, BadInputNamesFileAndLine) {
+    const auto expect_error = [](const std::string& name, const std::string& text, const std::string& needle) {
+        const std::string path = write_file(name, text);
+        try {
+            load_obj(path);
+            ADD_FAILURE() << name << " accepted";
+        } catch (const Error& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find(name), std::string::npos) << msg;
+            EXPECT_NE(msg.find(needle), std::string::npos) << msg;
+        }
+    };
+    expect_error("out_of_range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", ":4: vertex index 4 is out of range");
+    expect_error("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", ":2:");
+    expect_error("empty.obj", "# nothing\n", "no vertices");
+    expect_error("no_faces.obj", "v 0 0 0\n", "no faces");
+    expect_error("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "zero area");
+    expect_error("garbage.obj", "v 0 zero 0\n", "not a number");
+    EXPECT_THROW(load_mesh(test::scratch_dir() + "/missing.obj"), Error);
+}
+
+TEST(ObjIo, LoadsRealMeshesWithTextures) {
+    TDF_REQUIRE_SHARED_DATA("meshes/spot/spot_triangulated.obj");
+    const TriangleMesh spot = load_obj(test::shared_data_dir() + "/meshes/spot/spot_triangulated.obj");
+    EXPECT_EQ(spot.positions.size(), 2930u);
+    EXPECT_EQ(spot.triangles.size(), 5856u);
+    EXPECT_TRUE(spot.has_uvs());
+    // The mug names a missing .mtl: loads with a warning, no albedo.
+    const TriangleMesh mug = load_obj(test::shared_data_dir() + "/meshes/mug/mug.obj");
+    EXPECT_EQ(mug.triangles.size(), 24544u);
+    EXPECT_TRUE(mug.albedo.empty());
+}
