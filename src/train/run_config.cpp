@@ -1,0 +1,165 @@
+#include <tdf/train/run_config.h>
+
+#include <tdf/core/error.h>
+
+namespace tdf {
+
+namespace {
+
+template <typename T>
+T choose(ConfigReader& reader, const std::string& key, T fallback,
+         std::initializer_list<std::pair<const char*, T>> choices) {
+    if (!reader.has(key)) return fallback;
+    const std::string value = reader.require<std::string>(key);
+    std::string valid;
+    for (const auto& [name, choice] : choices) {
+        if (value == name) return choice;
+        valid += valid.empty() ? name : std::string(", ") + name;
+    }
+    throw_error("{}: '{}' must be one of {}, got '{}'", reader.where(), key, valid, value);
+}
+
+}  // namespace
+
+RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout, const Json& exporting,
+                               const Json& guidance, const std::string& source) {
+    RunConfig c;
+    ConfigReader r(optimize, source + ": optimize");
+    c.iterations = r.get("iterations", c.iterations);
+    c.init_iterations = r.get("init_iterations", c.init_iterations);
+    c.batch_size = r.get("batch_size", c.batch_size);
+    c.patch_batch_size = r.get("patch_batch_size", c.patch_batch_size);
+    c.resolution = r.get("resolution", c.resolution);
+    c.patch_resolution = r.get("patch_resolution", c.patch_resolution);
+    c.max_ssaa = r.get("max_ssaa", c.max_ssaa);
+    c.learning_rate = r.get("learning_rate", c.learning_rate);
+    c.checkpoint_every = r.get("checkpoint_every", c.checkpoint_every);
+    c.held_out_views = r.get("held_out_views", c.held_out_views);
+    c.held_out_patches = r.get("held_out_patches", c.held_out_patches);
+    c.field_raw_coordinates = r.get("field_raw_coordinates", c.field_raw_coordinates);
+    c.tactile_guidance_loss = choose(r, "tactile_guidance_loss", c.tactile_guidance_loss,
+                                     {{"cosine", TactileGuidanceLoss::Cosine}, {"mse", TactileGuidanceLoss::Mse}});
+    ConfigReader w = r.child("weights");
+    LossWeights& lw = c.weights;
+    lw.albedo_init = w.get("albedo_init", lw.albedo_init);
+    lw.albedo_refine = w.get("albedo_refine", lw.albedo_refine);
+    lw.tactile_init = w.get("tactile_init", lw.tactile_init);
+    lw.tactile_refine = w.get("tactile_refine", lw.tactile_refine);
+    lw.tactile_guidance = w.get("tactile_guidance", lw.tactile_guidance);
+    lw.visual_guidance = w.get("visual_guidance", lw.visual_guidance);
+    lw.visual_guidance_structural = w.get("visual_guidance_structural", lw.visual_guidance_structural);
+    w.check_all_read();
+    r.check_all_read();
+
+    ConfigReader t(tactile_layout, source + ": tactile_layout");
+    c.tactile_layout = choose(t, "mode", c.tactile_layout,
+                              {{"atlas", TactileLayout::Atlas}, {"physical", TactileLayout::Physical}});
+    c.mm_per_unit = t.get("mm_per_unit", c.mm_per_unit);
+    c.tactile_mm_per_pixel = t.get("mm_per_pixel", c.tactile_mm_per_pixel);
+    t.check_all_read();
+
+    ConfigReader e(exporting, source + ": export");
+    c.texture_size = e.get("texture_size", c.texture_size);
+    c.gutter = e.get("gutter", c.gutter);
+    c.write_glb = e.get("glb", c.write_glb);
+    c.write_exr = e.get("exr", c.write_exr);
+    c.turntable_views = e.get("turntable_views", c.turntable_views);
+    c.turntable_resolution = e.get("turntable_resolution", c.turntable_resolution);
+    e.check_all_read();
+
+    // The guidance section is validated by the backends themselves; here only the names.
+    if (guidance.is_object()) {
+        c.guidance_config = guidance;
+        if (guidance.contains("visual")) {
+            if (!guidance["visual"].is_string()) throw_error("{}: guidance.visual must be a backend name", source);
+            c.guidance_visual = guidance["visual"].get<std::string>();
+        }
+        if (guidance.contains("tactile")) {
+            if (!guidance["tactile"].is_string()) throw_error("{}: guidance.tactile must be a backend name", source);
+            c.guidance_tactile = guidance["tactile"].get<std::string>();
+        }
+        if (guidance.contains("save_frames")) {
+            if (!guidance["save_frames"].is_boolean()) throw_error("{}: guidance.save_frames must be true or false", source);
+            c.save_guidance_frames = guidance["save_frames"].get<bool>();
+        }
+    } else if (!guidance.is_null()) {
+        throw_error("{}: 'guidance' must be an object", source);
+    }
+    c.validate(source);
+    return c;
+}
+
+void RunConfig::validate(const std::string& source) const {
+    const auto positive = [&](const char* key, double value) {
+        if (!(value > 0)) throw_error("{}: {} must be positive, got {}", source, key, value);
+    };
+    positive("optimize.iterations", iterations);
+    positive("optimize.batch_size", batch_size);
+    positive("optimize.patch_batch_size", patch_batch_size);
+    positive("optimize.resolution", resolution);
+    positive("optimize.patch_resolution", patch_resolution);
+    positive("optimize.learning_rate", learning_rate);
+    positive("export.texture_size", texture_size);
+    if (init_iterations < 0 || init_iterations > iterations)
+        throw_error("{}: optimize.init_iterations must be in [0, iterations={}], got {}", source, iterations,
+                    init_iterations);
+    if (resolution > 8192 || patch_resolution > 8192 || texture_size > 16384)
+        throw_error("{}: resolutions above 8192 (16384 for textures) are not supported", source);
+    if (!(max_ssaa >= 1.0f && max_ssaa <= 4.0f))
+        throw_error("{}: optimize.max_ssaa must be in [1, 4], got {}", source, max_ssaa);
+    if (gutter < 0) throw_error("{}: export.gutter must be >= 0, got {}", source, gutter);
+    if (checkpoint_every < 0) throw_error("{}: optimize.checkpoint_every must be >= 0", source);
+    if (held_out_views < 0 || held_out_patches < 0) throw_error("{}: held-out counts must be >= 0", source);
+    if (turntable_views < 0) throw_error("{}: export.turntable_views must be >= 0", source);
+    if (tactile_layout == TactileLayout::Physical && !(mm_per_unit > 0))
+        throw_error("{}: tactile_layout.mode=physical needs tactile_layout.mm_per_unit > 0 (millimetres per mesh unit)",
+                    source);
+    const float all_weights[] = {weights.albedo_init, weights.albedo_refine, weights.tactile_init,
+                                 weights.tactile_refine, weights.tactile_guidance, weights.visual_guidance,
+                                 weights.visual_guidance_structural};
+    for (float v : all_weights)
+        if (!(v >= 0.0f)) throw_error("{}: loss weights must be >= 0 and finite", source);
+}
+
+Json RunConfig::to_json() const {
+    Json j;
+    j["optimize"] = {
+        {"iterations", iterations},
+        {"init_iterations", init_iterations},
+        {"batch_size", batch_size},
+        {"patch_batch_size", patch_batch_size},
+        {"resolution", resolution},
+        {"patch_resolution", patch_resolution},
+        {"max_ssaa", max_ssaa},
+        {"learning_rate", learning_rate},
+        {"checkpoint_every", checkpoint_every},
+        {"held_out_views", held_out_views},
+        {"held_out_patches", held_out_patches},
+        {"field_raw_coordinates", field_raw_coordinates},
+        {"tactile_guidance_loss", tactile_guidance_loss == TactileGuidanceLoss::Cosine ? "cosine" : "mse"},
+        {"weights",
+         {{"albedo_init", weights.albedo_init},
+          {"albedo_refine", weights.albedo_refine},
+          {"tactile_init", weights.tactile_init},
+          {"tactile_refine", weights.tactile_refine},
+          {"tactile_guidance", weights.tactile_guidance},
+          {"visual_guidance", weights.visual_guidance},
+          {"visual_guidance_structural", weights.visual_guidance_structural}}}};
+    j["tactile_layout"] = {{"mode", tactile_layout == TactileLayout::Atlas ? "atlas" : "physical"},
+                           {"mm_per_unit", mm_per_unit},
+                           {"mm_per_pixel", tactile_mm_per_pixel}};
+    j["export"] = {{"texture_size", texture_size},
+                   {"gutter", gutter},
+                   {"glb", write_glb},
+                   {"exr", write_exr},
+                   {"turntable_views", turntable_views},
+                   {"turntable_resolution", turntable_resolution}};
+    Json g = guidance_config;
+    g["visual"] = guidance_visual;
+    g["tactile"] = guidance_tactile;
+    g["save_frames"] = save_guidance_frames;
+    j["guidance"] = g;
+    return j;
+}
+
+}  // namespace tdf
