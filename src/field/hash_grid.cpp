@@ -43,4 +43,48 @@ HashGrid::HashGrid(const HashGridConfig& config) : m_config(config) {
     m_entry_count = std::size_t(offset);
 }
 
+void HashGrid::encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features) const {
+    TDF_CHECK_LE(count, kBatch);
+    GridCorners c[kBatch];
+    const std::size_t stride = std::size_t(feature_count());
+    for (int level = 0; level < level_count(); ++level) {
+        const float* table = grid_params + std::size_t(m_levels[std::size_t(level)].offset) * kFeaturesPerLevel;
+        for (std::size_t i = 0; i < count; ++i) {
+            corners(level, x[i], c[i]);
+            for (int k = 0; k < 8; ++k) __builtin_prefetch(table + std::size_t(c[i].index[k]) * kFeaturesPerLevel);
+        }
+        for (std::size_t i = 0; i < count; ++i) {
+            float f0 = 0, f1 = 0;
+            for (int k = 0; k < 8; ++k) {
+                const float* entry = table + std::size_t(c[i].index[k]) * kFeaturesPerLevel;
+                f0 += c[i].weight[k] * entry[0];
+                f1 += c[i].weight[k] * entry[1];
+            }
+            features[i * stride + std::size_t(2 * level)] = f0;
+            features[i * stride + std::size_t(2 * level) + 1] = f1;
+        }
+    }
+}
+
+void HashGrid::accumulate_level_gradient_batch(int level, const Vec3f* x, std::size_t count,
+                                               const float* d_features, float* grid_gradient) const {
+    TDF_CHECK_LE(count, kBatch);
+    GridCorners c[kBatch];
+    float* table = grid_gradient + std::size_t(m_levels[std::size_t(level)].offset) * kFeaturesPerLevel;
+    for (std::size_t i = 0; i < count; ++i) {
+        if (d_features[2 * i] == 0.0f && d_features[2 * i + 1] == 0.0f) continue;
+        corners(level, x[i], c[i]);
+        for (int k = 0; k < 8; ++k) __builtin_prefetch(table + std::size_t(c[i].index[k]) * kFeaturesPerLevel, 1);
+    }
+    for (std::size_t i = 0; i < count; ++i) {
+        const float d0 = d_features[2 * i], d1 = d_features[2 * i + 1];
+        if (d0 == 0.0f && d1 == 0.0f) continue;
+        for (int k = 0; k < 8; ++k) {
+            float* entry = table + std::size_t(c[i].index[k]) * kFeaturesPerLevel;
+            entry[0] += c[i].weight[k] * d0;
+            entry[1] += c[i].weight[k] * d1;
+        }
+    }
+}
+
 }  // namespace tdf

@@ -72,28 +72,38 @@ void TextureField::encode(Vec3f p, float* features) const {
     m_grid.encode(m_parameters.data(), to_grid(p), features);
 }
 
-// The heads are stored per head as [weight rows x F | bias rows]; output row r of the
-// concatenated [albedo, normal, label] layer therefore lives at these offsets.
-void TextureField::heads_forward(const float* e, float* z) const {
-    const int features = feature_count();
-    const float* p = m_parameters.data() + m_head_offset;
-    const int heads = m_config.labels ? 3 : 2;
+namespace {
+
+// The three heads as one kOutputs x F layer, transposed (feature-major) so that a point's
+// pre-activations are 8 independent, vectorizable sums. Built once per call from the flat
+// parameters, which store each head torch-style as [weight rows x F | bias rows].
+struct HeadMatrix {
+    float weight_t[2 * HashGrid::kMaxLevels][TextureField::kOutputs] = {};
+    float bias[TextureField::kOutputs] = {};
+};
+
+void build_head_matrix(const float* heads, int features, bool labels, HeadMatrix& m) {
     int row = 0;
-    for (int h = 0; h < heads; ++h) {
-        const float* weight = p;
-        const float* bias = p + kHeadRows[h] * features;
+    for (int h = 0; h < 3; ++h) {
+        const float* bias = heads + kHeadRows[h] * features;
         for (int r = 0; r < kHeadRows[h]; ++r, ++row) {
-            const float* w = weight + r * features;
-            float sum = 0;
-            for (int k = 0; k < features; ++k) sum += w[k] * e[k];
-            z[row] = sum + bias[r];
+            if (h == 2 && !labels) continue;  // label outputs stay 0
+            for (int k = 0; k < features; ++k) m.weight_t[k][row] = heads[r * features + k];
+            m.bias[row] = bias[r];
         }
-        p = bias + kHeadRows[h];
+        heads = bias + kHeadRows[h];
     }
-    if (!m_config.labels) z[6] = z[7] = 0;
 }
 
-void TextureField::activate(const float* z, FieldOutputs& out) const {
+inline void heads_forward(const HeadMatrix& m, const float* e, int features, float* z) {
+    float acc[TextureField::kOutputs];
+    for (int r = 0; r < TextureField::kOutputs; ++r) acc[r] = m.bias[r];
+    for (int k = 0; k < features; ++k)
+        for (int r = 0; r < TextureField::kOutputs; ++r) acc[r] += m.weight_t[k][r] * e[k];
+    for (int r = 0; r < TextureField::kOutputs; ++r) z[r] = acc[r];
+}
+
+inline void activate(const float* z, FieldOutputs& out) {
     out.albedo = {sigmoid(z[0]), sigmoid(z[1]), sigmoid(z[2])};
     const Vec3f u(std::tanh(z[3]), std::tanh(z[4]), std::tanh(z[5]) + 1.0f);
     out.normal = normalize_or_zero(u, kNormalEps);
@@ -101,14 +111,46 @@ void TextureField::activate(const float* z, FieldOutputs& out) const {
     out.label[1] = z[7];
 }
 
+// dL/dz for one point from dL/d(outputs) (the activations' backward).
+inline void activation_backward(const float* z, const FieldOutputGrads& g, bool labels, float* dz) {
+    for (int k = 0; k < 3; ++k) {
+        const float a = sigmoid(z[k]);
+        dz[k] = g.d_albedo[k] * a * (1.0f - a);
+    }
+    // n = u / max(|u|, eps) with u = tanh(z) + (0,0,1): dn/du = (I - n n^T) / |u| above eps.
+    const float t[3] = {std::tanh(z[3]), std::tanh(z[4]), std::tanh(z[5])};
+    const Vec3f u(t[0], t[1], t[2] + 1.0f);
+    const float len = length(u);
+    Vec3f du;
+    if (len > kNormalEps) {
+        const Vec3f n = u / len;
+        du = (g.d_normal - n * dot(n, g.d_normal)) / len;
+    } else {
+        du = g.d_normal / kNormalEps;
+    }
+    for (int k = 0; k < 3; ++k) dz[3 + k] = du[k] * (1.0f - t[k] * t[k]);
+    dz[6] = labels ? g.d_label[0] : 0.0f;
+    dz[7] = labels ? g.d_label[1] : 0.0f;
+}
+
+}  // namespace
+
 void TextureField::evaluate(const Vec3f* points, std::size_t n, FieldOutputs* out) const {
+    const int features = feature_count();
+    HeadMatrix heads;
+    build_head_matrix(m_parameters.data() + m_head_offset, features, m_config.labels, heads);
     parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
-        float e[2 * HashGrid::kMaxLevels];
+        Vec3f x[HashGrid::kBatch];
+        float e[HashGrid::kBatch * 2 * HashGrid::kMaxLevels];
         float z[kOutputs];
-        for (std::size_t i = begin; i < end; ++i) {
-            encode(points[i], e);
-            heads_forward(e, z);
-            activate(z, out[i]);
+        for (std::size_t b = begin; b < end; b += HashGrid::kBatch) {
+            const std::size_t count = std::min(HashGrid::kBatch, end - b);
+            for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
+            m_grid.encode_batch(m_parameters.data(), x, count, e);
+            for (std::size_t i = 0; i < count; ++i) {
+                heads_forward(heads, e + i * std::size_t(features), features, z);
+                activate(z, out[b + i]);
+            }
         }
     });
 }
@@ -118,12 +160,14 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
     if (gradient.size() != m_parameters.size()) gradient.assign(m_parameters.size(), 0.0f);
     if (n == 0) return;
     const int features = feature_count();
-    const int levels = m_grid.level_count();
+    const std::size_t levels = std::size_t(m_grid.level_count());
     const std::size_t head_count = m_parameters.size() - m_head_offset;
     const std::size_t chunks = chunk_count(n, kChunk);
     const std::size_t block_points = kBlockChunks * kChunk;
-    const int heads = m_config.labels ? 3 : 2;
-    const float* params = m_parameters.data();
+    const int head_rows = m_config.labels ? kOutputs : kOutputs - 2;
+    const float* head_params = m_parameters.data() + m_head_offset;
+    HeadMatrix heads;
+    build_head_matrix(head_params, features, m_config.labels, heads);
 
     // Scratch grows once and is reused by later calls (the hot path allocates nothing).
     if (m_scratch.head_partials.size() < chunks * head_count) m_scratch.head_partials.resize(chunks * head_count);
@@ -145,75 +189,60 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
         const std::size_t block_chunks = chunk_count(block_end - block_begin, kChunk);
 
         parallel_for(block_chunks, 1, [&](std::size_t c0, std::size_t c1) {
-            float e[2 * HashGrid::kMaxLevels];
-            float de[2 * HashGrid::kMaxLevels];
-            float z[kOutputs];
-            float dz[kOutputs];
+            Vec3f x[HashGrid::kBatch];
+            float e[HashGrid::kBatch * 2 * HashGrid::kMaxLevels];
+            float z[kOutputs], dz[kOutputs];
             for (std::size_t c = c0; c < c1; ++c) {
+                // Head gradient layout = flat parameter layout of the heads.
                 float* partial = partials + (first_chunk + c) * head_count;
                 std::fill(partial, partial + head_count, 0.0f);
                 const std::size_t begin = block_begin + c * kChunk;
                 const std::size_t end = std::min(block_end, begin + kChunk);
-                for (std::size_t i = begin; i < end; ++i) {
-                    const FieldOutputGrads& g = grads[i];
-                    encode(points[i], e);
-                    heads_forward(e, z);
-                    // Albedo: sigmoid' = a (1 - a).
-                    for (int k = 0; k < 3; ++k) {
-                        const float a = sigmoid(z[k]);
-                        dz[k] = g.d_albedo[k] * a * (1.0f - a);
-                    }
-                    // Normal: n = u / max(|u|, eps), u = tanh(z) + (0,0,1).
-                    const float t[3] = {std::tanh(z[3]), std::tanh(z[4]), std::tanh(z[5])};
-                    const Vec3f u(t[0], t[1], t[2] + 1.0f);
-                    const float len = length(u);
-                    Vec3f du;
-                    if (len > kNormalEps) {
-                        const Vec3f nrm = u / len;
-                        du = (g.d_normal - nrm * dot(nrm, g.d_normal)) / len;
-                    } else {
-                        du = g.d_normal / kNormalEps;
-                    }
-                    for (int k = 0; k < 3; ++k) dz[3 + k] = du[k] * (1.0f - t[k] * t[k]);
-                    dz[6] = m_config.labels ? g.d_label[0] : 0.0f;
-                    dz[7] = m_config.labels ? g.d_label[1] : 0.0f;
-
-                    // Head gradients into this chunk's partial; de = W^T dz.
-                    std::fill(de, de + features, 0.0f);
-                    const float* w = params + m_head_offset;
-                    float* gw = partial;
-                    int row = 0;
-                    for (int h = 0; h < heads; ++h) {
-                        for (int r = 0; r < kHeadRows[h]; ++r, ++row) {
-                            const float d = dz[row];
-                            const float* wr = w + r * features;
-                            float* gr = gw + r * features;
-                            for (int k = 0; k < features; ++k) {
-                                gr[k] += d * e[k];
-                                de[k] += wr[k] * d;
+                for (std::size_t b = begin; b < end; b += HashGrid::kBatch) {
+                    const std::size_t count = std::min(HashGrid::kBatch, end - b);
+                    for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
+                    m_grid.encode_batch(m_parameters.data(), x, count, e);
+                    for (std::size_t i = 0; i < count; ++i) {
+                        const float* ei = e + i * std::size_t(features);
+                        heads_forward(heads, ei, features, z);
+                        activation_backward(z, grads[b + i], m_config.labels, dz);
+                        float de[2 * HashGrid::kMaxLevels] = {};
+                        const float* w = head_params;
+                        float* gw = partial;
+                        for (int h = 0, row = 0; row < head_rows; ++h) {
+                            for (int r = 0; r < kHeadRows[h]; ++r, ++row) {
+                                const float d = dz[row];
+                                const float* wr = w + r * features;
+                                float* gr = gw + r * features;
+                                for (int k = 0; k < features; ++k) {
+                                    gr[k] += d * ei[k];
+                                    de[k] += wr[k] * d;
+                                }
+                                gw[kHeadRows[h] * features + r] += d;
                             }
-                            gw[kHeadRows[h] * features + r] += d;
+                            w += kHeadRows[h] * (features + 1);
+                            gw += kHeadRows[h] * (features + 1);
                         }
-                        w += kHeadRows[h] * (features + 1);
-                        gw += kHeadRows[h] * (features + 1);
-                    }
-                    const std::size_t local = i - block_begin;
-                    for (int l = 0; l < levels; ++l) {
-                        float* dst = d_features + (std::size_t(l) * block_points + local) * 2;
-                        dst[0] = de[2 * l];
-                        dst[1] = de[2 * l + 1];
+                        const std::size_t local = b + i - block_begin;
+                        for (std::size_t l = 0; l < levels; ++l) {
+                            float* dst = d_features + (l * block_points + local) * 2;
+                            dst[0] = de[2 * l];
+                            dst[1] = de[2 * l + 1];
+                        }
                     }
                 }
             }
         });
 
-        parallel_for(std::size_t(levels), 1, [&](std::size_t l0, std::size_t l1) {
+        parallel_for(levels, 1, [&](std::size_t l0, std::size_t l1) {
+            Vec3f x[HashGrid::kBatch];
             for (std::size_t l = l0; l < l1; ++l) {
                 const float* src = d_features + l * block_points * 2;
-                for (std::size_t i = block_begin; i < block_end; ++i) {
-                    const float* d = src + (i - block_begin) * 2;
-                    if (d[0] == 0.0f && d[1] == 0.0f) continue;  // no gradient to spread
-                    m_grid.accumulate_level_gradient(int(l), to_grid(points[i]), d, gradient.data());
+                for (std::size_t b = block_begin; b < block_end; b += HashGrid::kBatch) {
+                    const std::size_t count = std::min(HashGrid::kBatch, block_end - b);
+                    for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
+                    m_grid.accumulate_level_gradient_batch(int(l), x, count, src + (b - block_begin) * 2,
+                                                           gradient.data());
                 }
             }
         });

@@ -62,12 +62,22 @@ public:
     /// `pos_fract` + `grid_index`, wrapping uint32 arithmetic included).
     inline void corners(int level, Vec3f x, GridCorners& out) const;
 
-    /// Writes the feature_count() features of grid-space point `x` to `features`.
-    inline void encode(const float* grid_params, Vec3f x, float* features) const;
+    /// Points per call of the batched functions below.
+    static constexpr std::size_t kBatch = 64;
 
-    /// Adds d(features)/d(grid params)^T * d_level_features for one level: the two values
-    /// `d_features[0..1]` (dL/d feature 2l, 2l+1) spread over the 8 corners of `x`.
-    inline void accumulate_level_gradient(int level, Vec3f x, const float* d_features, float* grid_gradient) const;
+    /// Writes the feature_count() features of grid-space point `x` to `features`.
+    void encode(const float* grid_params, Vec3f x, float* features) const { encode_batch(grid_params, &x, 1, features); }
+
+    /// Encodes `count` <= kBatch grid-space points `x` into `features` (count rows of
+    /// feature_count() floats). Level by level, with the corner indices of the whole batch
+    /// computed and prefetched before they are read, so cache misses on the fine levels overlap.
+    void encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features) const;
+
+    /// Adds d(features of `level`)/d(grid params)^T * d for `count` <= kBatch points: for point
+    /// i, `d_features[2i], d_features[2i+1]` (dL/d features 2l, 2l+1) are spread over its 8
+    /// corners, in point order (so the sums are deterministic). Points with d = (0,0) are skipped.
+    void accumulate_level_gradient_batch(int level, const Vec3f* x, std::size_t count, const float* d_features,
+                                         float* grid_gradient) const;
 
 private:
     HashGridConfig m_config;
@@ -92,10 +102,13 @@ inline void HashGrid::corners(int level, Vec3f x, GridCorners& out) const {
         // tcnn uses fmaf here; a plain multiply-add differs by at most one rounding, which only
         // matters for exact weight transfer (impossible anyway, spec 4.2).
         const float pos = l.scale * x[d] + 0.5f;
-        // The clamp keeps the int conversion defined for absurd or NaN inputs (NaN -> -1e9).
-        const float cell = std::min(1e9f, std::max(-1e9f, std::floor(pos)));
-        g[d] = std::uint32_t(int(cell));
-        w1[d] = pos - cell;
+        // floor via truncation (std::floor is a libm call without SSE4.1). The clamp keeps the
+        // int conversion defined for absurd or NaN inputs (NaN -> -1e9, weights NaN).
+        const float clamped = std::min(1e9f, std::max(-1e9f, pos));
+        int cell = int(clamped);
+        cell -= int(clamped < float(cell));
+        g[d] = std::uint32_t(cell);
+        w1[d] = pos - float(cell);
     }
     std::uint32_t ax[2], ay[2], az[2];
     if (l.hashed) {
@@ -117,34 +130,6 @@ inline void HashGrid::corners(int level, Vec3f x, GridCorners& out) const {
     }
     const float wx[2] = {1.0f - w1[0], w1[0]}, wy[2] = {1.0f - w1[1], w1[1]}, wz[2] = {1.0f - w1[2], w1[2]};
     for (int c = 0; c < 8; ++c) out.weight[c] = wx[c & 1] * wy[(c >> 1) & 1] * wz[c >> 2];
-}
-
-inline void HashGrid::encode(const float* grid_params, Vec3f x, float* features) const {
-    GridCorners c;
-    for (int level = 0; level < level_count(); ++level) {
-        corners(level, x, c);
-        const float* table = grid_params + std::size_t(m_levels[std::size_t(level)].offset) * kFeaturesPerLevel;
-        float f0 = 0, f1 = 0;
-        for (int k = 0; k < 8; ++k) {
-            const float* entry = table + std::size_t(c.index[k]) * kFeaturesPerLevel;
-            f0 += c.weight[k] * entry[0];
-            f1 += c.weight[k] * entry[1];
-        }
-        features[2 * level] = f0;
-        features[2 * level + 1] = f1;
-    }
-}
-
-inline void HashGrid::accumulate_level_gradient(int level, Vec3f x, const float* d_features,
-                                                       float* grid_gradient) const {
-    GridCorners c;
-    corners(level, x, c);
-    float* table = grid_gradient + std::size_t(m_levels[std::size_t(level)].offset) * kFeaturesPerLevel;
-    for (int k = 0; k < 8; ++k) {
-        float* entry = table + std::size_t(c.index[k]) * kFeaturesPerLevel;
-        entry[0] += c.weight[k] * d_features[0];
-        entry[1] += c.weight[k] * d_features[1];
-    }
 }
 
 }  // namespace tdf

@@ -116,11 +116,6 @@ private:
         std::vector<float> head_partials;  // per-chunk head gradients
     };
 
-    /// Head pre-activations z (kOutputs) from features e.
-    void heads_forward(const float* e, float* z) const;
-    /// Outputs from pre-activations.
-    void activate(const float* z, FieldOutputs& out) const;
-
     FieldConfig m_config;
     HashGrid m_grid;
     Vec3f m_grid_origin;
