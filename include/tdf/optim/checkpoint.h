@@ -1,0 +1,30 @@
+#pragma once
+/// One binary file holding the field parameters, the Adam state and the caller's extra bytes
+/// (for instance a JSON object with the iteration and RNG states), so a run can resume exactly.
+///
+/// Layout (little-endian): magic "TDFCKPT\0", u32 version (1), u32 reserved (0),
+/// u64 parameter count, u64 Adam blob size, u64 extra size, parameters (float32),
+/// Adam blob (AdamState::to_bytes), extra bytes, u64 FNV-1a checksum of everything before it.
+/// Written atomically (temporary file, then rename), so a crash never leaves a half file.
+#include <tdf/optim/adam.h>
+
+#include <string>
+#include <vector>
+
+namespace tdf {
+
+struct FieldCheckpoint {
+    std::vector<float> parameters;
+    AdamState adam;
+    std::string extra;  ///< opaque to this module
+};
+
+/// Writes `path` atomically; throws tdf::Error when it cannot be written (disk full, ...).
+void save_field_checkpoint(const std::string& path, const std::vector<float>& parameters, const AdamState& adam,
+                           const std::string& extra = {});
+
+/// Reads a checkpoint; throws tdf::Error naming `path` when it is missing, not a checkpoint,
+/// of another version, truncated, or fails its checksum.
+FieldCheckpoint load_field_checkpoint(const std::string& path);
+
+}  // namespace tdf

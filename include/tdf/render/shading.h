@@ -1,0 +1,44 @@
+#pragma once
+/// Tangent-frame composition and the two lighting models (training spec 3.4, visualizer 3.9).
+#include <tdf/core/rng.h>
+#include <tdf/core/vec.h>
+
+namespace tdf {
+
+/// World shading normal from a tangent-space normal p (spec 3.3):
+/// normalize(T px + w normalize(N x T) py + N pz). With w = +1 this is the reference's
+/// normalize(T px - B py + N pz), B = normalize(T x N). w = -1 on mirrored UV charts flips the
+/// bitangent so the map's green channel still points toward increasing v (tdf default; the
+/// reference discards the sign, which TangentMode::Reference reproduces by giving w = +1).
+/// Uses safe_normalize, so a zero frame (background) gives a zero vector.
+Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f tangent_space_normal);
+/// The same before the final normalisation (the visualizer's unnormalised viewspace_normal,
+/// spec 3.9 / 13.19).
+Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f tangent_space_normal);
+
+/// The training renderer's `magic3d` point-light sample (spec 3.4). Three draws in the
+/// reference's order: azimuth phi ~ U[-pi, pi), elevation theta ~ U[pi/6, pi/2), distance
+/// d ~ U[3, 5). Frame: z_l = normalize(camera_position), x_l = normalize((z_l.y, -z_l.x, 0)),
+/// y_l = normalize(z_l x x_l); L = d (cos theta cos phi x_l + cos theta sin phi y_l + sin theta z_l).
+/// When the camera lies on the world Z axis (elevation 0, azimuth 0 or 180) x_l is a zero vector
+/// in the reference (spec 13.16); tdf uses x_l = (1, 0, 0) there. Any unit vector perpendicular
+/// to z_l gives the same light distribution (phi is uniform), so only the roll of the sample
+/// changes. Returns the world-space light position.
+Vec3f sample_magic3d_light(Rng& rng, Vec3f camera_position);
+
+/// Training shade (spec 3.4): 0.5 max(0, n . l) + 0.5 with l = normalize(light - p).
+inline float training_shade(Vec3f n, Vec3f light_position, Vec3f p) {
+    return 0.5f * std::max(0.f, dot(n, safe_normalize(light_position - p))) + 0.5f;
+}
+
+/// Visualizer shade (spec 3.9): ambient + (1 - ambient) max(0, n . l) for a unit direction
+/// toward the light; ambient = --ambient_light_ratio (0.1).
+inline float visualizer_shade(Vec3f n, Vec3f direction_to_light, float ambient) {
+    return ambient + (1.f - ambient) * std::max(0.f, dot(n, direction_to_light));
+}
+
+/// Direction toward the light from orbit angles in degrees (spec 3.9, same formula as orbit
+/// cameras): (cos e sin a, -sin e, cos e cos a).
+Vec3f orbit_direction(float elevation_deg, float azimuth_deg);
+
+}  // namespace tdf

@@ -1,0 +1,52 @@
+#pragma once
+/// A mip-mapped texture with nvdiffrast's sampling semantics (spec 3.7): texel centres at
+/// (k + 0.5) / size, bilinear filtering, wrap addressing, and for trilinear filtering a LOD of
+/// 0.5 log2 of the major eigenvalue of J^T J (J = d(texel coords)/d(pixel)).
+///
+/// UVs are tdf's (OBJ convention, v up): texel coordinates are x = u W - 0.5 and
+/// y = (1 - v) H - 0.5, so v = 1 is the top row of the image (the reference's v' = 1 - v).
+#include <tdf/core/image.h>
+#include <tdf/core/vec.h>
+
+#include <vector>
+
+namespace tdf {
+
+/// Largest channel count a MipTexture accepts (per-sample scratch lives on the stack).
+constexpr int kMaxTextureChannels = 16;
+
+class MipTexture {
+public:
+    MipTexture() = default;
+    /// Builds the pyramid from `image` (any channel count, any size). Level k+1 has size
+    /// max(1, floor(size_k / 2)) per axis, each texel the area-weighted box average of the
+    /// level-k texels it covers: exactly the 2x2 box filter of spec 3.7 for even sizes, and a
+    /// footprint of 2 + 1/size_{k+1} texels (partial texels weighted by coverage) for odd sizes.
+    explicit MipTexture(const Image& image);
+
+    bool empty() const { return m_levels.empty(); }
+    int channels() const { return m_levels.empty() ? 0 : m_levels[0].channels(); }
+    int width() const { return m_levels.empty() ? 0 : m_levels[0].width(); }
+    int height() const { return m_levels.empty() ? 0 : m_levels[0].height(); }
+    int level_count() const { return int(m_levels.size()); }
+    const Image& level(int k) const { return m_levels[std::size_t(k)]; }
+
+    /// Bilinear lookup on level 0; writes channels() floats to `out`.
+    void sample_bilinear(Vec2f uv, float* out) const;
+    /// Bilinear lookup on one level.
+    void sample_level(int level, Vec2f uv, float* out) const;
+    /// Trilinear ("linear-mipmap-linear") lookup. duv_dx / duv_dy are the UV derivatives per
+    /// output pixel (tdf convention, v up). LOD is clamped to [0, max_level] where max_level = -1
+    /// means the whole pyramid (training) and 5 is the visualizer's cap (spec 3.9).
+    void sample_trilinear(Vec2f uv, Vec2f duv_dx, Vec2f duv_dy, float* out, int max_level = -1) const;
+    /// The LOD sample_trilinear() uses (before clamping).
+    float level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const;
+
+private:
+    std::vector<Image> m_levels;
+};
+
+/// One level of the pyramid from the previous one (exposed for tests).
+Image downsample_box(const Image& src);
+
+}  // namespace tdf

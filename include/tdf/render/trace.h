@@ -1,0 +1,40 @@
+#pragma once
+/// Primary-ray tracing into a GBuffer: Embree packets (16-wide on AVX-512 CPUs, otherwise
+/// 8-wide), 16x16 tiles in parallel. Clipping is the rasterizer's planar near/far (spec 2.2),
+/// there is no back-face culling, and pixel centres are at (j + 0.5, i + 0.5).
+#include <tdf/mesh/triangle_mesh.h>
+#include <tdf/render/gbuffer.h>
+#include <tdf/scene/camera.h>
+#include <tdf/scene/embree_scene.h>
+
+#include <vector>
+
+namespace tdf {
+
+/// Side of the square tiles traced in parallel.
+constexpr int kTraceTile = 16;
+
+/// Traces camera.width x camera.height primary rays. `mesh` must be the mesh `scene` was built
+/// from (its attributes are interpolated at the hits). Deterministic for any thread count.
+GBuffer trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera);
+/// The same, reusing `out`'s allocations.
+void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out);
+/// Traces the pixels [x0, x1) x [y0, y1) into `out`, which must already be sized for the camera.
+/// For renderers that shade each tile right after tracing it (cache-friendly).
+void trace_gbuffer_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0,
+                        int x1, int y1, GBuffer& out);
+
+/// Baseline for benchmarks: the same packets and tiles, closest hit only; writes the hit
+/// distance (0 on a miss) per pixel to `t` and returns the number of hits.
+std::size_t trace_closest_hits(const EmbreeScene& scene, const Camera& camera, std::vector<float>& t);
+
+/// One ray with rtcIntersect1, for tests and picking: the hit's triangle (or -1), its
+/// barycentrics and distance.
+struct RayHit {
+    int triangle = -1;
+    Vec2f barycentric;
+    float t = 0;
+};
+RayHit trace_ray(const EmbreeScene& scene, const Ray& ray);
+
+}  // namespace tdf

@@ -1,0 +1,262 @@
+#include <tdf/field/texture_field.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+#include <tdf/core/rng.h>
+
+#include <cmath>
+
+namespace tdf {
+
+namespace {
+
+// Points per backward block: the level-major dL/d(encoding) of one block is 32768 x 32 floats
+// (4 MiB), small enough to stay cache-friendly, large enough that the per-level scatter
+// tasks amortize their start.
+constexpr std::size_t kBlockChunks = 32;
+
+constexpr int kHeadRows[3] = {3, 3, 2};
+const char* const kHeadNames[3] = {"albedo", "normal", "label"};
+
+// torch F.normalize eps for the tangent-space normal (spec 4.1).
+constexpr float kNormalEps = 1e-12f;
+
+inline float sigmoid(float z) { return 1.0f / (1.0f + std::exp(-z)); }
+
+}  // namespace
+
+TextureField::TextureField(const FieldConfig& config, const FieldDomain& domain, std::uint64_t seed)
+    : m_config(config), m_grid(config.grid) {
+    if (config.input == FieldInput::BoundingBox) {
+        if (!is_finite(domain.lower) || !is_finite(domain.upper))
+            throw_error("field domain: bounding box is not finite");
+        const Vec3f extent = domain.upper - domain.lower;
+        const float side = std::max(extent.x, std::max(extent.y, extent.z));
+        if (!(side > 0.0f)) throw_error("field domain: bounding box is empty (longest side {})", side);
+        if (!(config.margin >= 0.0f) || !(config.margin <= 1.0f))
+            throw_error("field.margin: {} is out of range 0..1", config.margin);
+        const float padded = side * (1.0f + 2.0f * config.margin);
+        m_grid_origin = (domain.lower + domain.upper) * 0.5f - Vec3f(1, 1, 1) * (0.5f * padded);
+        m_grid_scale = 1.0f / padded;
+    }
+
+    const std::size_t features = std::size_t(m_grid.feature_count());
+    std::size_t offset = 0;
+    m_blocks.push_back({"grid", 0, m_grid.parameter_count()});
+    offset += m_grid.parameter_count();
+    m_head_offset = offset;
+    for (int h = 0; h < 3; ++h) {
+        const std::size_t rows = std::size_t(kHeadRows[h]);
+        m_blocks.push_back({std::string(kHeadNames[h]) + ".weight", offset, rows * features});
+        offset += rows * features;
+        m_blocks.push_back({std::string(kHeadNames[h]) + ".bias", offset, rows});
+        offset += rows;
+    }
+    m_parameters.resize(offset);
+
+    Rng rng(seed);
+    // Matches reference: tcnn grid init U[-1e-4, 1e-4]; torch Linear init U(-1/sqrt(in), 1/sqrt(in))
+    // for weights and biases alike (spec 4.1).
+    for (std::size_t i = 0; i < m_head_offset; ++i) m_parameters[i] = rng.uniform(-1e-4f, 1e-4f);
+    const float bound = 1.0f / std::sqrt(float(features));
+    for (std::size_t i = m_head_offset; i < offset; ++i) m_parameters[i] = rng.uniform(-bound, bound);
+}
+
+const ParameterBlock& TextureField::parameter_block(const std::string& name) const {
+    for (const ParameterBlock& b : m_blocks)
+        if (b.name == name) return b;
+    throw_error("field: no parameter block named '{}'", name);
+}
+
+void TextureField::encode(Vec3f p, float* features) const {
+    m_grid.encode(m_parameters.data(), to_grid(p), features);
+}
+
+namespace {
+
+// The three heads as one kOutputs x F layer, transposed (feature-major) so that a point's
+// pre-activations are 8 independent, vectorizable sums. Built once per call from the flat
+// parameters, which store each head torch-style as [weight rows x F | bias rows].
+struct HeadMatrix {
+    float weight_t[2 * HashGrid::kMaxLevels][TextureField::kOutputs] = {};
+    float bias[TextureField::kOutputs] = {};
+};
+
+void build_head_matrix(const float* heads, int features, bool labels, HeadMatrix& m) {
+    int row = 0;
+    for (int h = 0; h < 3; ++h) {
+        const float* bias = heads + kHeadRows[h] * features;
+        for (int r = 0; r < kHeadRows[h]; ++r, ++row) {
+            if (h == 2 && !labels) continue;  // label outputs stay 0
+            for (int k = 0; k < features; ++k) m.weight_t[k][row] = heads[r * features + k];
+            m.bias[row] = bias[r];
+        }
+        heads = bias + kHeadRows[h];
+    }
+}
+
+inline void heads_forward(const HeadMatrix& m, const float* e, int features, float* z) {
+    float acc[TextureField::kOutputs];
+    for (int r = 0; r < TextureField::kOutputs; ++r) acc[r] = m.bias[r];
+    for (int k = 0; k < features; ++k)
+        for (int r = 0; r < TextureField::kOutputs; ++r) acc[r] += m.weight_t[k][r] * e[k];
+    for (int r = 0; r < TextureField::kOutputs; ++r) z[r] = acc[r];
+}
+
+inline void activate(const float* z, FieldOutputs& out) {
+    out.albedo = {sigmoid(z[0]), sigmoid(z[1]), sigmoid(z[2])};
+    const Vec3f u(std::tanh(z[3]), std::tanh(z[4]), std::tanh(z[5]) + 1.0f);
+    out.normal = normalize_or_zero(u, kNormalEps);
+    out.label[0] = z[6];
+    out.label[1] = z[7];
+}
+
+// dL/dz for one point from dL/d(outputs) (the activations' backward).
+inline void activation_backward(const float* z, const FieldOutputGrads& g, bool labels, float* dz) {
+    for (int k = 0; k < 3; ++k) {
+        const float a = sigmoid(z[k]);
+        dz[k] = g.d_albedo[k] * a * (1.0f - a);
+    }
+    // n = u / max(|u|, eps) with u = tanh(z) + (0,0,1): dn/du = (I - n n^T) / |u| above eps.
+    const float t[3] = {std::tanh(z[3]), std::tanh(z[4]), std::tanh(z[5])};
+    const Vec3f u(t[0], t[1], t[2] + 1.0f);
+    const float len = length(u);
+    Vec3f du;
+    if (len > kNormalEps) {
+        const Vec3f n = u / len;
+        du = (g.d_normal - n * dot(n, g.d_normal)) / len;
+    } else {
+        du = g.d_normal / kNormalEps;
+    }
+    for (int k = 0; k < 3; ++k) dz[3 + k] = du[k] * (1.0f - t[k] * t[k]);
+    dz[6] = labels ? g.d_label[0] : 0.0f;
+    dz[7] = labels ? g.d_label[1] : 0.0f;
+}
+
+}  // namespace
+
+void TextureField::evaluate(const Vec3f* points, std::size_t n, FieldOutputs* out) const {
+    const int features = feature_count();
+    HeadMatrix heads;
+    build_head_matrix(m_parameters.data() + m_head_offset, features, m_config.labels, heads);
+    parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
+        Vec3f x[HashGrid::kBatch];
+        float e[HashGrid::kBatch * 2 * HashGrid::kMaxLevels];
+        float z[kOutputs];
+        for (std::size_t b = begin; b < end; b += HashGrid::kBatch) {
+            const std::size_t count = std::min(HashGrid::kBatch, end - b);
+            for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
+            m_grid.encode_batch(m_parameters.data(), x, count, e);
+            for (std::size_t i = 0; i < count; ++i) {
+                heads_forward(heads, e + i * std::size_t(features), features, z);
+                activate(z, out[b + i]);
+            }
+        }
+    });
+}
+
+void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, std::size_t n,
+                            std::vector<float>& gradient) const {
+    if (gradient.size() != m_parameters.size()) gradient.assign(m_parameters.size(), 0.0f);
+    if (n == 0) return;
+    const int features = feature_count();
+    const std::size_t levels = std::size_t(m_grid.level_count());
+    const std::size_t head_count = m_parameters.size() - m_head_offset;
+    const std::size_t chunks = chunk_count(n, kChunk);
+    const std::size_t block_points = kBlockChunks * kChunk;
+    const int head_rows = m_config.labels ? kOutputs : kOutputs - 2;
+    const float* head_params = m_parameters.data() + m_head_offset;
+    HeadMatrix heads;
+    build_head_matrix(head_params, features, m_config.labels, heads);
+
+    // Scratch grows once and is reused by later calls (the hot path allocates nothing).
+    if (m_scratch.head_partials.size() < chunks * head_count) m_scratch.head_partials.resize(chunks * head_count);
+    if (m_scratch.d_features.size() < block_points * std::size_t(features))
+        m_scratch.d_features.resize(block_points * std::size_t(features));
+    float* d_features = m_scratch.d_features.data();
+    float* partials = m_scratch.head_partials.data();
+
+    // Two phases per block of points. Phase A (parallel over fixed chunks): forward, output
+    // gradients -> head pre-activation gradients dz, per-chunk head gradients, and the encoding
+    // gradient de = W^T dz stored level-major. Phase B (parallel over levels): each level's task
+    // scatters de into its own table in point order. Every grid entry is therefore summed in
+    // point order by exactly one task, and head gradients in chunk order: bit-identical for
+    // any thread count, without atomics or per-thread copies of the 3.8 MB grid gradient, and
+    // each task's scatter target (one level table, <= 256 KiB) stays in cache.
+    for (std::size_t block_begin = 0; block_begin < n; block_begin += block_points) {
+        const std::size_t block_end = std::min(n, block_begin + block_points);
+        const std::size_t first_chunk = block_begin / kChunk;
+        const std::size_t block_chunks = chunk_count(block_end - block_begin, kChunk);
+
+        parallel_for(block_chunks, 1, [&](std::size_t c0, std::size_t c1) {
+            Vec3f x[HashGrid::kBatch];
+            float e[HashGrid::kBatch * 2 * HashGrid::kMaxLevels];
+            float z[kOutputs], dz[kOutputs];
+            for (std::size_t c = c0; c < c1; ++c) {
+                // Head gradient layout = flat parameter layout of the heads.
+                float* partial = partials + (first_chunk + c) * head_count;
+                std::fill(partial, partial + head_count, 0.0f);
+                const std::size_t begin = block_begin + c * kChunk;
+                const std::size_t end = std::min(block_end, begin + kChunk);
+                for (std::size_t b = begin; b < end; b += HashGrid::kBatch) {
+                    const std::size_t count = std::min(HashGrid::kBatch, end - b);
+                    for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
+                    m_grid.encode_batch(m_parameters.data(), x, count, e);
+                    for (std::size_t i = 0; i < count; ++i) {
+                        const float* ei = e + i * std::size_t(features);
+                        heads_forward(heads, ei, features, z);
+                        activation_backward(z, grads[b + i], m_config.labels, dz);
+                        float de[2 * HashGrid::kMaxLevels] = {};
+                        const float* w = head_params;
+                        float* gw = partial;
+                        for (int h = 0, row = 0; row < head_rows; ++h) {
+                            for (int r = 0; r < kHeadRows[h]; ++r, ++row) {
+                                const float d = dz[row];
+                                const float* wr = w + r * features;
+                                float* gr = gw + r * features;
+                                for (int k = 0; k < features; ++k) {
+                                    gr[k] += d * ei[k];
+                                    de[k] += wr[k] * d;
+                                }
+                                gw[kHeadRows[h] * features + r] += d;
+                            }
+                            w += kHeadRows[h] * (features + 1);
+                            gw += kHeadRows[h] * (features + 1);
+                        }
+                        const std::size_t local = b + i - block_begin;
+                        for (std::size_t l = 0; l < levels; ++l) {
+                            float* dst = d_features + (l * block_points + local) * 2;
+                            dst[0] = de[2 * l];
+                            dst[1] = de[2 * l + 1];
+                        }
+                    }
+                }
+            }
+        });
+
+        parallel_for(levels, 1, [&](std::size_t l0, std::size_t l1) {
+            Vec3f x[HashGrid::kBatch];
+            for (std::size_t l = l0; l < l1; ++l) {
+                const float* src = d_features + l * block_points * 2;
+                for (std::size_t b = block_begin; b < block_end; b += HashGrid::kBatch) {
+                    const std::size_t count = std::min(HashGrid::kBatch, block_end - b);
+                    for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
+                    m_grid.accumulate_level_gradient_batch(int(l), x, count, src + (b - block_begin) * 2,
+                                                           gradient.data());
+                }
+            }
+        });
+    }
+
+    // Head gradients: per-chunk partials summed in chunk order (in double, then added once).
+    float* head_gradient = gradient.data() + m_head_offset;
+    parallel_for(head_count, 64, [&](std::size_t j0, std::size_t j1) {
+        for (std::size_t j = j0; j < j1; ++j) {
+            double sum = 0;
+            for (std::size_t c = 0; c < chunks; ++c) sum += double(partials[c * head_count + j]);
+            head_gradient[j] += float(sum);
+        }
+    });
+}
+
+}  // namespace tdf

@@ -1,0 +1,34 @@
+#include <tdf/render/shading.h>
+
+#include <cmath>
+
+namespace tdf {
+
+Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {
+    // -B = -normalize(T x N) = normalize(N x T).
+    const Vec3f bitangent = safe_normalize(cross(N, T)) * w;
+    return T * p.x + bitangent * p.y + N * p.z;
+}
+
+Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f p) {
+    return safe_normalize(shading_normal_unnormalized(T, N, w, p));
+}
+
+Vec3f sample_magic3d_light(Rng& rng, Vec3f camera_position) {
+    const float phi = rng.uniform(-kPi, kPi);
+    const float theta = rng.uniform(kPi / 6.f, kPi / 2.f);
+    const float distance = rng.uniform(3.f, 5.f);
+    const Vec3f z = safe_normalize(camera_position);
+    Vec3f x{z.y, -z.x, 0.f};
+    x = length_squared(x) < 1e-12f ? Vec3f{1.f, 0.f, 0.f} : safe_normalize(x);
+    const Vec3f y = safe_normalize(cross(z, x));
+    const float ct = std::cos(theta);
+    return (x * (ct * std::cos(phi)) + y * (ct * std::sin(phi)) + z * std::sin(theta)) * distance;
+}
+
+Vec3f orbit_direction(float elevation_deg, float azimuth_deg) {
+    const float e = radians(elevation_deg), a = radians(azimuth_deg);
+    return {std::cos(e) * std::sin(a), -std::sin(e), std::cos(e) * std::cos(a)};
+}
+
+}  // namespace tdf

@@ -1,0 +1,127 @@
+#include <tdf/render/texture.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace tdf {
+
+namespace {
+
+// For one axis: destination texel d covers source interval [d s, (d+1) s), s = src / dst.
+// Each destination texel gets the (first index, weights) of the source texels it overlaps.
+struct BoxTaps {
+    std::vector<int> first;
+    std::vector<int> count;
+    std::vector<float> weights;  // flattened, kMaxTaps per destination texel
+    static constexpr int kMaxTaps = 4;
+};
+
+BoxTaps box_taps(int src, int dst) {
+    BoxTaps taps;
+    taps.first.resize(std::size_t(dst));
+    taps.count.resize(std::size_t(dst));
+    taps.weights.assign(std::size_t(dst) * BoxTaps::kMaxTaps, 0.f);
+    const double scale = double(src) / double(dst);
+    for (int d = 0; d < dst; ++d) {
+        const double lo = d * scale, hi = (d + 1) * scale;
+        const int first = int(std::floor(lo));
+        const int last = std::min(src - 1, int(std::ceil(hi)) - 1);
+        taps.first[std::size_t(d)] = first;
+        taps.count[std::size_t(d)] = last - first + 1;
+        TDF_CHECK_LE(last - first + 1, BoxTaps::kMaxTaps);
+        for (int s = first; s <= last; ++s) {
+            const double overlap = std::min(hi, double(s + 1)) - std::max(lo, double(s));
+            taps.weights[std::size_t(d) * BoxTaps::kMaxTaps + std::size_t(s - first)] = float(overlap / scale);
+        }
+    }
+    return taps;
+}
+
+inline int wrap(int i, int n) {
+    const int r = i % n;
+    return r < 0 ? r + n : r;
+}
+
+}  // namespace
+
+Image downsample_box(const Image& src) {
+    const int w = std::max(1, src.width() / 2), h = std::max(1, src.height() / 2), c = src.channels();
+    const BoxTaps tx = box_taps(src.width(), w), ty = box_taps(src.height(), h);
+    Image dst(w, h, c);
+    parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
+        for (std::size_t y = y0; y < y1; ++y) {
+            for (int x = 0; x < w; ++x) {
+                float* out = dst.pixel(x, int(y));
+                for (int j = 0; j < ty.count[y]; ++j) {
+                    const float wy = ty.weights[y * BoxTaps::kMaxTaps + std::size_t(j)];
+                    for (int i = 0; i < tx.count[std::size_t(x)]; ++i) {
+                        const float wxy = wy * tx.weights[std::size_t(x) * BoxTaps::kMaxTaps + std::size_t(i)];
+                        const float* in = src.pixel(tx.first[std::size_t(x)] + i, ty.first[y] + j);
+                        for (int k = 0; k < c; ++k) out[k] += wxy * in[k];
+                    }
+                }
+            }
+        }
+    });
+    return dst;
+}
+
+MipTexture::MipTexture(const Image& image) {
+    if (image.empty()) throw_error("cannot build a texture from an empty image");
+    if (image.channels() > kMaxTextureChannels)
+        throw_error("textures have at most {} channels, this image has {}", kMaxTextureChannels, image.channels());
+    m_levels.push_back(image);
+    while (m_levels.back().width() > 1 || m_levels.back().height() > 1)
+        m_levels.push_back(downsample_box(m_levels.back()));
+}
+
+void MipTexture::sample_level(int level, Vec2f uv, float* out) const {
+    const Image& img = m_levels[std::size_t(level)];
+    const int w = img.width(), h = img.height(), c = img.channels();
+    const float x = uv.x * float(w) - 0.5f;
+    const float y = (1.f - uv.y) * float(h) - 0.5f;
+    const float fx0 = std::floor(x), fy0 = std::floor(y);
+    const float ax = x - fx0, ay = y - fy0;
+    // Wrap in float first so huge UVs do not overflow the int conversion.
+    const int x0 = wrap(int(std::fmod(fx0, float(w))), w), y0 = wrap(int(std::fmod(fy0, float(h))), h);
+    const int x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
+    const float* p00 = img.pixel(x0, y0);
+    const float* p10 = img.pixel(x1, y0);
+    const float* p01 = img.pixel(x0, y1);
+    const float* p11 = img.pixel(x1, y1);
+    const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+    for (int k = 0; k < c; ++k) out[k] = w00 * p00[k] + w10 * p10[k] + w01 * p01[k] + w11 * p11[k];
+}
+
+void MipTexture::sample_bilinear(Vec2f uv, float* out) const { sample_level(0, uv, out); }
+
+float MipTexture::level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const {
+    // J columns in level-0 texels per pixel; the sign of dv does not change J^T J.
+    const float w = float(width()), h = float(height());
+    const float ax = duv_dx.x * w, ay = duv_dx.y * h;
+    const float bx = duv_dy.x * w, by = duv_dy.y * h;
+    const float a = ax * ax + ay * ay, c = bx * bx + by * by, b = ax * bx + ay * by;
+    const float half_diff = 0.5f * (a - c);
+    const float major = 0.5f * (a + c) + std::sqrt(half_diff * half_diff + b * b);
+    return major > 0.f ? 0.5f * std::log2(major) : -1e30f;
+}
+
+void MipTexture::sample_trilinear(Vec2f uv, Vec2f duv_dx, Vec2f duv_dy, float* out, int max_level) const {
+    const int top = max_level < 0 ? level_count() - 1 : std::min(max_level, level_count() - 1);
+    float lod = level_of_detail(duv_dx, duv_dy);
+    if (!(lod > 0.f)) lod = 0.f;  // also catches NaN
+    lod = std::min(lod, float(top));
+    const int l0 = int(lod);
+    const float frac = lod - float(l0);
+    sample_level(l0, uv, out);
+    if (frac <= 0.f || l0 + 1 > top) return;
+    const int c = channels();
+    float next[kMaxTextureChannels];
+    sample_level(l0 + 1, uv, next);
+    for (int k = 0; k < c; ++k) out[k] += frac * (next[k] - out[k]);
+}
+
+}  // namespace tdf

@@ -1,0 +1,240 @@
+#include <tdf/render/trace.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+
+#include <cmath>
+
+namespace tdf {
+
+namespace {
+
+// Packet shapes: 16 rays as 4x4 pixels, 8 as 4x2; square-ish blocks keep rays coherent.
+template <int N>
+struct PacketShape;
+template <>
+struct PacketShape<16> {
+    static constexpr int kW = 4, kH = 4;
+    using RayHit = RTCRayHit16;
+    static void intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+        rtcIntersect16(valid, s, c, r);
+    }
+};
+template <>
+struct PacketShape<8> {
+    static constexpr int kW = 4, kH = 2;
+    using RayHit = RTCRayHit8;
+    static void intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+        rtcIntersect8(valid, s, c, r);
+    }
+};
+
+// Shared by the G-buffer tracer and the bare baseline: fills one packet with the rays of the
+// block at (bx, by), traces it and calls hit(pixel_x, pixel_y, lane, rayhit) for every lane
+// inside the image (misses included: geomID is RTC_INVALID_GEOMETRY_ID).
+template <int N, typename OnLane>
+void trace_tile_packets(const EmbreeScene& scene, const Camera& camera, int x0, int y0, int x1, int y1,
+                        OnLane&& on_lane) {
+    using Shape = PacketShape<N>;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    alignas(64) typename Shape::RayHit packet;
+    alignas(64) int valid[N];
+    for (int by = y0; by < y1; by += Shape::kH) {
+        for (int bx = x0; bx < x1; bx += Shape::kW) {
+            for (int lane = 0; lane < N; ++lane) {
+                const int x = bx + lane % Shape::kW, y = by + lane / Shape::kW;
+                valid[lane] = (x < x1 && y < y1) ? -1 : 0;
+                const Ray ray = camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f);
+                packet.ray.org_x[lane] = ray.origin.x;
+                packet.ray.org_y[lane] = ray.origin.y;
+                packet.ray.org_z[lane] = ray.origin.z;
+                packet.ray.dir_x[lane] = ray.direction.x;
+                packet.ray.dir_y[lane] = ray.direction.y;
+                packet.ray.dir_z[lane] = ray.direction.z;
+                packet.ray.tnear[lane] = ray.tnear;
+                packet.ray.tfar[lane] = ray.tfar;
+                packet.ray.time[lane] = 0.f;
+                packet.ray.mask[lane] = 0xFFFFFFFFu;
+                packet.ray.id[lane] = unsigned(lane);
+                packet.ray.flags[lane] = 0;
+                packet.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+                packet.hit.instID[0][lane] = RTC_INVALID_GEOMETRY_ID;
+            }
+            Shape::intersect(valid, scene.handle(), &context, &packet);
+            for (int lane = 0; lane < N; ++lane)
+                if (valid[lane]) on_lane(bx + lane % Shape::kW, by + lane / Shape::kW, lane, packet);
+        }
+    }
+}
+
+template <typename OnLane>
+void trace_tile_dispatch(const EmbreeScene& scene, const Camera& camera, int x0, int y0, int x1, int y1,
+                         OnLane&& on_lane) {
+    if (scene.native_packet16())
+        trace_tile_packets<16>(scene, camera, x0, y0, x1, y1, on_lane);
+    else
+        trace_tile_packets<8>(scene, camera, x0, y0, x1, y1, on_lane);
+}
+
+inline Vec4f operator*(Vec4f a, float s) { return {a.x * s, a.y * s, a.z * s, a.w * s}; }
+inline Vec4f operator+(Vec4f a, Vec4f b) { return {a.x + b.x, a.y + b.y, a.z + b.z, a.w + b.w}; }
+
+template <typename T>
+T interpolate(const std::vector<T>& values, const Vec3i& corners, float b1, float b2) {
+    const float b0 = 1.f - b1 - b2;
+    return values[std::size_t(corners.x)] * b0 + values[std::size_t(corners.y)] * b1 +
+           values[std::size_t(corners.z)] * b2;
+}
+
+// Camera ray derivatives, constant over the image.
+struct RayDerivatives {
+    Vec3f do_dx, do_dy, dd_dx, dd_dy;
+};
+
+// dP/dpixel of the hit point on the triangle's plane (Igehy 1999 ray differentials), then
+// the barycentric and UV derivatives. Matches the rasterizer's analytic screen-space
+// derivatives of perspective-correct interpolation (spec 3.7).
+void uv_derivatives(const TriangleMesh& mesh, int f, Vec3f origin, Vec3f direction, float t,
+                    const RayDerivatives& rd, Vec2f& duv_dx, Vec2f& duv_dy) {
+    const Vec3i& tri = mesh.triangles[std::size_t(f)];
+    const Vec3f p0 = mesh.positions[std::size_t(tri.x)];
+    const Vec3f e1 = mesh.positions[std::size_t(tri.y)] - p0;
+    const Vec3f e2 = mesh.positions[std::size_t(tri.z)] - p0;
+    const Vec3f ng = cross(e1, e2);
+    const float det = dot(ng, ng);
+    float ng_d = dot(ng, direction);
+    const float min_ng_d = 1e-8f * std::sqrt(det * dot(direction, direction));
+    if (std::fabs(ng_d) < min_ng_d) ng_d = ng_d < 0 ? -min_ng_d : min_ng_d;
+    if (det <= 0.f) {
+        duv_dx = duv_dy = {};
+        return;
+    }
+    const float a11 = dot(e1, e1), a12 = dot(e1, e2), a22 = dot(e2, e2);
+    const Vec3i& uvt = mesh.uv_triangles[std::size_t(f)];
+    const Vec2f uv0 = mesh.uvs[std::size_t(uvt.x)];
+    const Vec2f du1 = mesh.uvs[std::size_t(uvt.y)] - uv0;
+    const Vec2f du2 = mesh.uvs[std::size_t(uvt.z)] - uv0;
+    auto derivative = [&](Vec3f d_origin, Vec3f d_direction) {
+        const float dt = -(dot(ng, d_origin) + t * dot(ng, d_direction)) / ng_d;
+        const Vec3f dp = d_origin + d_direction * t + direction * dt;
+        const float r1 = dot(e1, dp), r2 = dot(e2, dp);
+        const float db1 = (a22 * r1 - a12 * r2) / det;
+        const float db2 = (a11 * r2 - a12 * r1) / det;
+        return du1 * db1 + du2 * db2;
+    };
+    duv_dx = derivative(rd.do_dx, rd.dd_dx);
+    duv_dy = derivative(rd.do_dy, rd.dd_dy);
+}
+
+void check_inputs(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera) {
+    TDF_CHECK_EQ(scene.triangle_count(), mesh.triangles.size());
+    TDF_CHECK_EQ(mesh.normals.size(), mesh.positions.size());
+    if (camera.width <= 0 || camera.height <= 0)
+        throw_error("image size {}x{} is empty (width and height must be positive)", camera.width, camera.height);
+}
+
+}  // namespace
+
+void trace_gbuffer_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0,
+                        int x1, int y1, GBuffer& out) {
+    TDF_CHECK(out.width == camera.width && out.height == camera.height);
+    RayDerivatives rd;
+    camera.ray_derivatives(rd.do_dx, rd.do_dy, rd.dd_dx, rd.dd_dy);
+    const bool has_uvs = mesh.has_uvs();
+    const bool has_tangents = !mesh.tangents.empty();
+    trace_tile_dispatch(scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
+        const std::size_t i = out.index(x, y);
+        if (packet.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) {
+            out.clear_pixel(i);
+            return;
+        }
+        const int f = int(packet.hit.primID[lane]);
+        const float b1 = packet.hit.u[lane], b2 = packet.hit.v[lane], t = packet.ray.tfar[lane];
+        const Vec3i& tri = mesh.triangles[std::size_t(f)];
+        out.mask[i] = 1.f;
+        out.triangle[i] = f;
+        out.barycentric[i] = {b1, b2};
+        out.position[i] = interpolate(mesh.positions, tri, b1, b2);
+        out.depth[i] = t;  // direction has camera-space z = -1, so t = -z_cam
+        out.normal[i] = safe_normalize(interpolate(mesh.normals, tri, b1, b2));
+        if (has_tangents) {
+            const Vec4f tw = interpolate(mesh.tangents, mesh.tangent_triangles[std::size_t(f)], b1, b2);
+            out.tangent[i] = safe_normalize(tw.xyz());
+            out.handedness[i] = tw.w < 0.f ? -1.f : 1.f;
+        } else {
+            out.tangent[i] = {};
+            out.handedness[i] = 1.f;
+        }
+        if (has_uvs) {
+            out.uv[i] = interpolate(mesh.uvs, mesh.uv_triangles[std::size_t(f)], b1, b2);
+            const Vec3f origin{packet.ray.org_x[lane], packet.ray.org_y[lane], packet.ray.org_z[lane]};
+            const Vec3f direction{packet.ray.dir_x[lane], packet.ray.dir_y[lane], packet.ray.dir_z[lane]};
+            uv_derivatives(mesh, f, origin, direction, t, rd, out.duv_dx[i], out.duv_dy[i]);
+        } else {
+            out.uv[i] = out.duv_dx[i] = out.duv_dy[i] = {};
+        }
+    });
+}
+
+void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out) {
+    check_inputs(scene, mesh, camera);
+    out.resize(camera.width, camera.height);
+    parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
+        trace_gbuffer_tile(scene, mesh, camera, x0, y0, x1, y1, out);
+    });
+    scene.throw_if_error("tracing");
+}
+
+GBuffer trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera) {
+    GBuffer out;
+    trace_gbuffer(scene, mesh, camera, out);
+    return out;
+}
+
+std::size_t trace_closest_hits(const EmbreeScene& scene, const Camera& camera, std::vector<float>& t) {
+    t.assign(std::size_t(camera.width) * std::size_t(camera.height), 0.f);
+    std::vector<std::size_t> tile_hits(chunk_count(std::size_t(camera.width), kTraceTile) *
+                                       chunk_count(std::size_t(camera.height), kTraceTile));
+    const int tiles_x = int(chunk_count(std::size_t(camera.width), kTraceTile));
+    parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
+        std::size_t hits = 0;
+        trace_tile_dispatch(scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
+            const bool hit = packet.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
+            t[std::size_t(y) * std::size_t(camera.width) + std::size_t(x)] = hit ? packet.ray.tfar[lane] : 0.f;
+            hits += hit;
+        });
+        tile_hits[std::size_t((y0 / kTraceTile) * tiles_x + x0 / kTraceTile)] = hits;
+    });
+    std::size_t total = 0;
+    for (std::size_t h : tile_hits) total += h;
+    return total;
+}
+
+RayHit trace_ray(const EmbreeScene& scene, const Ray& ray) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh{};
+    rh.ray.org_x = ray.origin.x;
+    rh.ray.org_y = ray.origin.y;
+    rh.ray.org_z = ray.origin.z;
+    rh.ray.dir_x = ray.direction.x;
+    rh.ray.dir_y = ray.direction.y;
+    rh.ray.dir_z = ray.direction.z;
+    rh.ray.tnear = ray.tnear;
+    rh.ray.tfar = ray.tfar;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene.handle(), &context, &rh);
+    RayHit hit;
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+        hit.triangle = int(rh.hit.primID);
+        hit.barycentric = {rh.hit.u, rh.hit.v};
+        hit.t = rh.ray.tfar;
+    }
+    return hit;
+}
+
+}  // namespace tdf

@@ -1,0 +1,103 @@
+#include <tdf/core/error.h>
+#include <tdf/render/texture.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace tdf;
+
+namespace {
+// 2x2 single-channel texture, rows top to bottom: [1 2; 3 4].
+MipTexture two_by_two() {
+    Image img(2, 2, 1);
+    img.at(0, 0, 0) = 1;
+    img.at(1, 0, 0) = 2;
+    img.at(0, 1, 0) = 3;
+    img.at(1, 1, 0) = 4;
+    return MipTexture(img);
+}
+}  // namespace
+
+TEST(MipTexture, BilinearUsesTexelCentresAndVUp) {
+    const MipTexture tex = two_by_two();
+    float out = 0;
+    // Texel (0,0) (top-left) centre: u = 0.25, v' = 0.25 -> v = 0.75.
+    tex.sample_bilinear({0.25f, 0.75f}, &out);
+    EXPECT_FLOAT_EQ(out, 1.f);
+    tex.sample_bilinear({0.75f, 0.25f}, &out);  // bottom-right texel
+    EXPECT_FLOAT_EQ(out, 4.f);
+    tex.sample_bilinear({0.5f, 0.5f}, &out);  // centre: average of all four
+    EXPECT_FLOAT_EQ(out, 2.5f);
+    // x = 0.6 * 2 - 0.5 = 0.7, y = (1 - 0.9) * 2 - 0.5 = -0.3 -> wraps to rows 1 (w .3) and 0 (w .7).
+    tex.sample_bilinear({0.6f, 0.9f}, &out);
+    const float top = 0.3f * 1 + 0.7f * 2, bottom = 0.3f * 3 + 0.7f * 4;
+    EXPECT_NEAR(out, 0.3f * bottom + 0.7f * top, 1e-6f);
+    // Wrap addressing: u = 0 blends the last and first columns equally.
+    tex.sample_bilinear({0.f, 0.75f}, &out);
+    EXPECT_FLOAT_EQ(out, 1.5f);
+    tex.sample_bilinear({3.f, 0.75f}, &out);
+    EXPECT_FLOAT_EQ(out, 1.5f);
+}
+
+TEST(MipTexture, PyramidIsABoxFilterDownToOneTexel) {
+    Image img(4, 2, 2);
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) {
+            img.at(x, y, 0) = float(x + 4 * y);
+            img.at(x, y, 1) = 1.f;
+        }
+    const MipTexture tex(img);
+    ASSERT_EQ(tex.level_count(), 3);  // 4x2, 2x1, 1x1
+    EXPECT_FLOAT_EQ(tex.level(1).at(0, 0, 0), (0 + 1 + 4 + 5) / 4.f);
+    EXPECT_FLOAT_EQ(tex.level(1).at(1, 0, 0), (2 + 3 + 6 + 7) / 4.f);
+    EXPECT_FLOAT_EQ(tex.level(2).at(0, 0, 0), 3.5f);
+    EXPECT_FLOAT_EQ(tex.level(2).at(0, 0, 1), 1.f);
+}
+
+TEST(MipTexture, OddSizesKeepTheMean) {
+    Image img(5, 3, 1);
+    double sum = 0;
+    for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 5; ++x) sum += img.at(x, y, 0) = float((x * 7 + y * 3) % 5);
+    const MipTexture tex(img);
+    ASSERT_EQ(tex.level(1).width(), 2);
+    ASSERT_EQ(tex.level(1).height(), 1);
+    EXPECT_NEAR(tex.level(tex.level_count() - 1).at(0, 0, 0), sum / 15, 1e-5);
+    // Level 1 texel 0 averages columns [0, 2.5) of all rows.
+    double expect = 0;
+    for (int y = 0; y < 3; ++y) expect += img.at(0, y, 0) + img.at(1, y, 0) + 0.5 * img.at(2, y, 0);
+    EXPECT_NEAR(tex.level(1).at(0, 0, 0), expect / 7.5, 1e-5);
+}
+
+TEST(MipTexture, TrilinearLodFromJacobian) {
+    Image img(8, 8, 1);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) img.at(x, y, 0) = float((x + y) % 2);  // checker: mean 0.5
+    const MipTexture tex(img);
+    // One texel per pixel -> LOD 0; 2 texels per pixel along x -> LOD 1; anisotropic: major axis.
+    EXPECT_NEAR(tex.level_of_detail({1.f / 8, 0}, {0, 1.f / 8}), 0.f, 1e-6f);
+    EXPECT_NEAR(tex.level_of_detail({2.f / 8, 0}, {0, 1.f / 8}), 1.f, 1e-6f);
+    EXPECT_NEAR(tex.level_of_detail({0, 0}, {0, -4.f / 8}), 2.f, 1e-6f);
+    float out = 0, l0 = 0, l1 = 0;
+    const Vec2f uv{0.3f, 0.6f};
+    tex.sample_level(0, uv, &l0);
+    tex.sample_level(1, uv, &l1);
+    // LOD 0.5: halfway between levels 0 and 1.
+    const float d = std::sqrt(2.f) / 8;
+    tex.sample_trilinear(uv, {d, 0}, {0, d}, &out);
+    EXPECT_NEAR(out, 0.5f * (l0 + l1), 1e-6f);
+    // Level 1 of a 1-texel checker is uniform 0.5; a huge footprint reaches the 1x1 level.
+    tex.sample_trilinear(uv, {100, 0}, {0, 100}, &out);
+    EXPECT_NEAR(out, 0.5f, 1e-6f);
+    // Magnification clamps to level 0; max_level caps the LOD.
+    tex.sample_trilinear(uv, {1e-4f, 0}, {0, 1e-4f}, &out);
+    EXPECT_FLOAT_EQ(out, l0);
+    tex.sample_trilinear(uv, {100, 0}, {0, 100}, &out, 1);
+    EXPECT_FLOAT_EQ(out, l1);
+}
+
+TEST(MipTexture, EmptyImageIsAnError) {
+    const Image empty;
+    EXPECT_THROW(MipTexture{empty}, Error);
+}

@@ -1,0 +1,110 @@
+#include <tdf/core/error.h>
+#include <tdf/render/trace.h>
+#include <tdf/scene/procedural_mesh.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace tdf;
+
+TEST(Trace, QuadFacingTheCameraGivesExactAttributes) {
+    const TriangleMesh quad = make_quad(1.f);
+    const EmbreeScene scene(quad);
+    const Camera cam = Camera::orbit(0, 0, 2, 90, 64, 64);  // tan(45) = 1: image spans [-2, 2]
+    const GBuffer g = trace_gbuffer(scene, quad, cam);
+    ASSERT_EQ(g.width, 64);
+    // The quad covers the central half of the image: 32 x 32 pixels.
+    float covered = 0;
+    for (float m : g.mask) covered += m;
+    EXPECT_EQ(covered, 32.f * 32.f);
+    const std::size_t i = g.index(40, 20);  // pixel centre (40.5, 20.5) -> world (0.53125, 0.71875)
+    ASSERT_EQ(g.mask[i], 1.f);
+    EXPECT_NEAR(g.position[i].x, 0.53125f, 1e-5f);
+    EXPECT_NEAR(g.position[i].y, 0.71875f, 1e-5f);
+    EXPECT_NEAR(g.depth[i], 2.f, 1e-5f);
+    EXPECT_NEAR(g.normal[i].z, 1.f, 1e-6f);
+    EXPECT_NEAR(g.tangent[i].x, 1.f, 1e-6f);
+    EXPECT_EQ(g.handedness[i], 1.f);
+    EXPECT_NEAR(g.uv[i].x, (0.53125f + 1) / 2, 1e-5f);
+    EXPECT_NEAR(g.uv[i].y, (0.71875f + 1) / 2, 1e-5f);
+    // One pixel is 4/64 world units = 1/32 in u; moving down the image lowers v.
+    EXPECT_NEAR(g.duv_dx[i].x, 1.f / 32, 1e-6f);
+    EXPECT_NEAR(g.duv_dx[i].y, 0.f, 1e-6f);
+    EXPECT_NEAR(g.duv_dy[i].y, -1.f / 32, 1e-6f);
+    const std::size_t bg = g.index(2, 2);
+    EXPECT_EQ(g.mask[bg], 0.f);
+    EXPECT_EQ(g.triangle[bg], -1);
+    EXPECT_EQ(g.depth[bg], 0.f);
+}
+
+TEST(Trace, UvDerivativesMatchFiniteDifferencesOnASphere) {
+    const TriangleMesh sphere = make_uv_sphere(1.f, 64, 32);
+    const EmbreeScene scene(sphere);
+    const Camera cam = Camera::orbit(-20, 30, 3, 49.1f, 256, 256);
+    const GBuffer g = trace_gbuffer(scene, sphere, cam);
+    int checked = 0;
+    for (int y = 60; y < 200; y += 7)
+        for (int x = 60; x < 200; x += 7) {
+            const std::size_t i = g.index(x, y), r = g.index(x + 1, y), d = g.index(x, y + 1);
+            if (!g.mask[i] || g.triangle[r] != g.triangle[i] || g.triangle[d] != g.triangle[i]) continue;
+            // Within one triangle UV is a rational function of the pixel; a 1-pixel difference
+            // agrees with the analytic derivative to second order.
+            const Vec2f fx = g.uv[r] - g.uv[i], fy = g.uv[d] - g.uv[i];
+            const float scale = std::fabs(g.duv_dx[i].x) + std::fabs(g.duv_dx[i].y) + std::fabs(g.duv_dy[i].x) +
+                                std::fabs(g.duv_dy[i].y);
+            EXPECT_NEAR(fx.x, g.duv_dx[i].x, 0.05f * scale);
+            EXPECT_NEAR(fx.y, g.duv_dx[i].y, 0.05f * scale);
+            EXPECT_NEAR(fy.x, g.duv_dy[i].x, 0.05f * scale);
+            EXPECT_NEAR(fy.y, g.duv_dy[i].y, 0.05f * scale);
+            ++checked;
+        }
+    EXPECT_GT(checked, 50);
+}
+
+TEST(Trace, NearPlaneIsPlanarAndBackFacesAreVisible) {
+    const TriangleMesh quad = make_quad(1.f);
+    const EmbreeScene scene(quad);
+    // From behind (azimuth 180) the quad is still visible: no culling.
+    const GBuffer back = trace_gbuffer(scene, quad, Camera::orbit(0, 180, 2, 49.1f, 16, 16));
+    EXPECT_EQ(back.mask[back.index(8, 8)], 1.f);
+    // Ortho camera 0.005 in front of the surface: inside the near plane, clipped.
+    const GBuffer clipped = trace_gbuffer(scene, quad, Camera::tactile_patch({0, 0, 0}, {0, 0, 1}, 16, 16, 0.005f));
+    EXPECT_EQ(clipped.mask[clipped.index(8, 8)], 0.f);
+    const GBuffer seen = trace_gbuffer(scene, quad, Camera::tactile_patch({0, 0, 0}, {0, 0, 1}, 16, 16, 0.02f));
+    EXPECT_EQ(seen.mask[seen.index(8, 8)], 1.f);
+    EXPECT_NEAR(seen.depth[seen.index(8, 8)], 0.02f, 1e-6f);
+    // Perspective near plane is planar: a corner pixel whose RADIAL distance exceeds 0.01 is
+    // still clipped when the plane is 0.009 in front.
+    Camera wide = Camera::orbit(0, 0, 0.009f, 120, 16, 16);
+    const GBuffer g = trace_gbuffer(scene, quad, wide);
+    for (float m : g.mask) EXPECT_EQ(m, 0.f);
+}
+
+TEST(Trace, MatchesBareClosestHitTracing) {
+    const TriangleMesh sphere = make_uv_sphere(1.f, 48, 24);
+    const EmbreeScene scene(sphere);
+    const Camera cam = Camera::orbit(10, 40, 2.5f, 49.1f, 100, 70);
+    const GBuffer g = trace_gbuffer(scene, sphere, cam);
+    std::vector<float> t;
+    const std::size_t hits = trace_closest_hits(scene, cam, t);
+    std::size_t mask_hits = 0;
+    for (std::size_t i = 0; i < g.pixel_count(); ++i) {
+        mask_hits += g.mask[i] > 0;
+        EXPECT_EQ(t[i], g.depth[i]);
+    }
+    EXPECT_EQ(hits, mask_hits);
+    // Single-ray tracing agrees with the packets.
+    const Ray ray = cam.generate_ray(50.5f, 35.5f);
+    const RayHit hit = trace_ray(scene, ray);
+    EXPECT_EQ(hit.triangle, g.triangle[g.index(50, 35)]);
+    EXPECT_NEAR(hit.t, g.depth[g.index(50, 35)], 1e-5f);
+}
+
+TEST(Trace, EmptyImageIsAnError) {
+    const TriangleMesh quad = make_quad(1.f);
+    const EmbreeScene scene(quad);
+    Camera cam = Camera::orbit(0, 0, 2, 49.1f, 16, 16);
+    cam.width = 0;
+    EXPECT_THROW(trace_gbuffer(scene, quad, cam), Error);
+}
