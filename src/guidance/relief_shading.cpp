@@ -13,11 +13,15 @@ namespace tdf {
 ReliefShadingBackend::Options ReliefShadingBackend::Options::from_json(const Json& config) {
     ConfigReader reader(config, "guidance backend 'relief_shading'");
     Options o;
-    o.gain = reader.get<float>("gain", o.gain);
+    o.contrast = reader.get<float>("contrast", o.contrast);
+    o.detail_sigma = reader.get<float>("detail_sigma", o.detail_sigma);
     o.curvature_sigma = reader.get<float>("curvature_sigma", o.curvature_sigma);
     o.curvature_percentile = reader.get<float>("curvature_percentile", o.curvature_percentile);
     reader.check_all_read();
-    if (!(o.gain >= 0.0f && o.gain <= 1.0f)) throw_error("{}: gain {} is outside [0, 1]", reader.where(), o.gain);
+    if (!(o.contrast >= 0.0f && o.contrast <= 1.0f))
+        throw_error("{}: contrast {} is outside [0, 1]", reader.where(), o.contrast);
+    if (!(o.detail_sigma > 0.0f && o.detail_sigma <= 32.0f))
+        throw_error("{}: detail_sigma {} is outside (0, 32]", reader.where(), o.detail_sigma);
     if (!(o.curvature_sigma >= 0.0f && o.curvature_sigma <= 32.0f))
         throw_error("{}: curvature_sigma {} is outside [0, 32]", reader.where(), o.curvature_sigma);
     if (!(o.curvature_percentile > 0.0f && o.curvature_percentile <= 1.0f))
@@ -56,13 +60,13 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
         throw_error("guidance backend 'relief_shading' handles visual requests only, got a {} request",
                     guidance_kind_name(request.kind));
     validate_request(request, "guidance backend 'relief_shading'");
-    const float amount = m_options.gain * float(denoise_fraction(request.strength));
+    const float f = float(denoise_fraction(request.strength));
     GuidanceResult result;
-    for (std::size_t i = 0; i < request.images.size(); ++i) {
-        const Image& colour = request.images[i];
-        const Image& mask = request.masks[i];
+    for (std::size_t item = 0; item < request.images.size(); ++item) {
+        const Image& colour = request.images[item];
+        const Image& mask = request.masks[item];
         const Image curvature =
-            normal_divergence(from_bae_control(request.control[i]), mask, m_options.curvature_sigma);
+            normal_divergence(from_bae_control(request.control[item]), mask, m_options.curvature_sigma);
 
         std::vector<float> magnitudes;
         for (std::size_t p = 0; p < curvature.pixel_count(); ++p)
@@ -74,21 +78,33 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
             scale = magnitudes[rank];
         }
 
+        const Image local_mean = gaussian_blur_masked(colour, mask, m_options.detail_sigma);
+        // Relief detail, high-passed at the same scale so that it does not move the local mean.
+        Image relief(colour.width(), colour.height(), 3);
+        for (std::size_t p = 0; p < colour.pixel_count(); ++p) {
+            const float k = scale > 0.0f ? std::clamp(curvature.data()[p] / scale, -1.0f, 1.0f) : 0.0f;
+            for (int c = 0; c < 3; ++c) {
+                const float mean = local_mean.data()[3 * p + std::size_t(c)];
+                relief.data()[3 * p + std::size_t(c)] = m_options.contrast * k * (k >= 0.0f ? 1.0f - mean : mean);
+            }
+        }
+        const Image relief_mean = gaussian_blur_masked(relief, mask, m_options.detail_sigma);
+
         Image out(colour.width(), colour.height(), 3);
         for (std::size_t p = 0; p < colour.pixel_count(); ++p) {
             const float m = mask.data()[p];
             float* dst = out.data() + 3 * p;
-            const float* src = colour.data() + 3 * p;
             if (m == 0.0f) {
                 // Matches reference: refined background forced to white (spec 5.4).
                 dst[0] = dst[1] = dst[2] = 1.0f;
                 continue;
             }
-            const float k = scale > 0.0f ? std::clamp(curvature.data()[p] / scale, -1.0f, 1.0f) : 0.0f;
             for (int c = 0; c < 3; ++c) {
-                const float v = src[c];
-                const float shaded = k >= 0.0f ? v + amount * k * (1.0f - v) : v * (1.0f + amount * k);
-                dst[c] = std::clamp(m * shaded + (1.0f - m) * v, 0.0f, 1.0f);
+                const std::size_t i = 3 * p + std::size_t(c);
+                const float v = colour.data()[i], mean = local_mean.data()[i];
+                const float detail = relief.data()[i] - relief_mean.data()[i];
+                const float refined = mean + (1.0f - f) * (v - mean) + f * detail;
+                dst[c] = std::clamp(m * refined + (1.0f - m) * v, 0.0f, 1.0f);
             }
         }
         result.refined.push_back(std::move(out));
