@@ -108,8 +108,9 @@ public:
                 int patch_size)
         : m_target(target), m_mask(mask), m_variants(variants), m_level(level), m_radius(patch_size / 2),
           m_width(target.width()), m_height(target.height()) {
-        // A pixel's patch takes part when its window touches the foreground.
-        m_active.assign(std::size_t(m_width) * std::size_t(m_height), 0);
+        // A pixel's patch takes part (kActive) when its window touches the foreground; kFull
+        // marks windows inside the image and fully covered, which take the fast distance path.
+        m_active.assign(std::size_t(m_width) * std::size_t(m_height), kInactive);
         for (int y = 0; y < m_height; ++y)
             for (int x = 0; x < m_width; ++x) {
                 if (m_mask.at(x, y, 0) <= 0.0f) continue;
@@ -117,8 +118,15 @@ public:
                     for (int dx = -m_radius; dx <= m_radius; ++dx) {
                         const int qx = x + dx, qy = y + dy;
                         if (qx >= 0 && qy >= 0 && qx < m_width && qy < m_height)
-                            m_active[index(qx, qy)] = 1;
+                            m_active[index(qx, qy)] = kActive;
                     }
+            }
+        for (int y = m_radius; y < m_height - m_radius; ++y)
+            for (int x = m_radius; x < m_width - m_radius; ++x) {
+                bool full = true;
+                for (int dy = -m_radius; dy <= m_radius && full; ++dy)
+                    for (int dx = -m_radius; dx <= m_radius && full; ++dx) full = m_mask.at(x + dx, y + dy, 0) >= 1.0f;
+                if (full) m_active[index(x, y)] = kFull;
             }
     }
 
@@ -137,6 +145,7 @@ public:
     /// stops early once it exceeds `bound`.
     float distance(int x, int y, const Match& m, float bound) const {
         const Image& e = exemplar(m.v);
+        if (m_active[index(x, y)] == kFull) return distance_full(x, y, e, m, bound);
         float sum = 0.0f;
         for (int dy = -m_radius; dy <= m_radius; ++dy) {
             const int ty = y + dy;
@@ -151,6 +160,32 @@ public:
                 const float d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
                 sum += w * (d0 * d0 + d1 * d1 + d2 * d2);
             }
+            if (sum > bound) return sum;
+        }
+        return sum;
+    }
+
+    /// distance() for a window inside the image with weight 1 everywhere: each window row is one
+    /// contiguous run of 3 * patch floats in both images. Four partial sums let the compiler
+    /// vectorise without reassociating.
+    float distance_full(int x, int y, const Image& e, const Match& m, float bound) const {
+        const int n = 3 * (2 * m_radius + 1);
+        float sum = 0.0f;
+        for (int dy = -m_radius; dy <= m_radius; ++dy) {
+            const float* a = m_target.pixel(x - m_radius, y + dy);
+            const float* b = e.pixel(m.x - m_radius, m.y + dy);
+            float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+            int i = 0;
+            for (; i + 4 <= n; i += 4)
+                for (int k = 0; k < 4; ++k) {
+                    const float d = a[i + k] - b[i + k];
+                    acc[k] += d * d;
+                }
+            for (; i < n; ++i) {
+                const float d = a[i] - b[i];
+                acc[0] += d * d;
+            }
+            sum += (acc[0] + acc[1]) + (acc[2] + acc[3]);
             if (sum > bound) return sum;
         }
         return sum;
@@ -296,6 +331,7 @@ private:
     int m_radius;
     int m_width;
     int m_height;
+    static constexpr unsigned char kInactive = 0, kActive = 1, kFull = 2;
     std::vector<unsigned char> m_active;
 };
 
