@@ -18,7 +18,8 @@ namespace {
 
 Image exemplar() {
     const char* env = std::getenv("TDF_SHARED_DATA");
-    const std::string path = std::string(env ? env : "../shared/data") + "/tactile/texture_samples/avocado_00000.png";
+    const std::string path =
+        std::string(env ? env : "../shared/data") + "/tactile/texture_samples/avocado_00000.png";
     if (std::filesystem::exists(path)) return read_normal_map(path);
     Image e(240, 240, 3);
     for (int y = 0; y < 240; ++y)

@@ -50,7 +50,8 @@ Image rotate_normal_map(const Image& source, float angle) {
     const bool exact = std::abs(angle - float(quarter) * 0.5f * kPi) < 1e-6f;
     int width = source.width(), height = source.height();
     if (exact && (quarter & 1)) std::swap(width, height);
-    if (!exact) width = height = int(float(std::min(source.width(), source.height())) / (std::abs(c) + std::abs(s)));
+    if (!exact)
+        width = height = int(float(std::min(source.width(), source.height())) / (std::abs(c) + std::abs(s)));
     const float cx_src = 0.5f * float(source.width() - 1), cy_src = 0.5f * float(source.height() - 1);
     const float cx = 0.5f * float(width - 1), cy = 0.5f * float(height - 1);
     Image out(width, height, 3);
@@ -106,8 +107,13 @@ class LevelSolver {
 public:
     LevelSolver(const Image& target, const Image& mask, const std::vector<Variant>& variants, int level,
                 int patch_size)
-        : m_target(target), m_mask(mask), m_variants(variants), m_level(level), m_radius(patch_size / 2),
-          m_width(target.width()), m_height(target.height()) {
+        : m_target(target),
+          m_mask(mask),
+          m_variants(variants),
+          m_level(level),
+          m_radius(patch_size / 2),
+          m_width(target.width()),
+          m_height(target.height()) {
         // A pixel's patch takes part (kActive) when its window touches the foreground; kFull
         // marks windows inside the image and fully covered, which take the fast distance path.
         m_active.assign(std::size_t(m_width) * std::size_t(m_height), kInactive);
@@ -125,7 +131,8 @@ public:
             for (int x = m_radius; x < m_width - m_radius; ++x) {
                 bool full = true;
                 for (int dy = -m_radius; dy <= m_radius && full; ++dy)
-                    for (int dx = -m_radius; dx <= m_radius && full; ++dx) full = m_mask.at(x + dx, y + dy, 0) >= 1.0f;
+                    for (int dx = -m_radius; dx <= m_radius && full; ++dx)
+                        full = m_mask.at(x + dx, y + dy, 0) >= 1.0f;
                 if (full) m_active[index(x, y)] = kFull;
             }
     }
@@ -360,9 +367,11 @@ ExemplarPatchMatchBackend::Options ExemplarPatchMatchBackend::Options::from_json
     Options o;
     if (reader.has("exemplars")) {
         const Json& files = reader.raw("exemplars");
-        if (!files.is_array()) throw_error("{}: \"exemplars\" must be an array of file names", reader.where());
+        if (!files.is_array())
+            throw_error("{}: \"exemplars\" must be an array of file names", reader.where());
         for (const Json& f : files) {
-            if (!f.is_string()) throw_error("{}: \"exemplars\" must be an array of file names", reader.where());
+            if (!f.is_string())
+                throw_error("{}: \"exemplars\" must be an array of file names", reader.where());
             o.exemplar_files.push_back(f.get<std::string>());
         }
     }
@@ -405,17 +414,21 @@ void ExemplarPatchMatchBackend::set_exemplars(std::vector<Image> tangent_normals
     for (std::size_t i = 0; i < tangent_normals.size(); ++i) {
         Image exemplar = std::move(tangent_normals[i]);
         if (exemplar.channels() < 3)
-            throw_error("guidance backend 'exemplar_patch_match': exemplar {} has {} channels, expected 3", i,
+            throw_error("guidance backend 'exemplar_patch_match': exemplar {} has {} channels, expected 3",
+                        i,
                         exemplar.channels());
         if (exemplar.channels() > 3) exemplar = exemplar.channel_range(0, 3);
         if (!exemplar.all_finite())
             throw_error("guidance backend 'exemplar_patch_match': exemplar {} has non-finite values", i);
         if (m_options.exemplar_scale != 1.0f)
-            exemplar = resize_bilinear(exemplar, std::max(1, int(std::lround(exemplar.width() * m_options.exemplar_scale))),
-                                       std::max(1, int(std::lround(exemplar.height() * m_options.exemplar_scale))));
+            exemplar =
+                resize_bilinear(exemplar,
+                                std::max(1, int(std::lround(exemplar.width() * m_options.exemplar_scale))),
+                                std::max(1, int(std::lround(exemplar.height() * m_options.exemplar_scale))));
         normalize_vectors(exemplar);
         for (int r = 0; r < m_options.rotations; ++r) {
-            const Image rotated = rotate_normal_map(exemplar, 2.0f * kPi * float(r) / float(m_options.rotations));
+            const Image rotated =
+                rotate_normal_map(exemplar, 2.0f * kPi * float(r) / float(m_options.rotations));
             for (int flip = 0; flip < (m_options.flip_rows ? 2 : 1); ++flip) {
                 Variant variant;
                 variant.levels.push_back(flip ? flip_rows(rotated) : rotated);
@@ -428,9 +441,14 @@ void ExemplarPatchMatchBackend::set_exemplars(std::vector<Image> tangent_normals
                 }
                 const Image& finest = variant.levels.front();
                 if (std::min(finest.width(), finest.height()) < m_options.patch_size)
-                    throw_error("guidance backend 'exemplar_patch_match': exemplar {} is {}x{} after scaling and "
-                                "rotation, smaller than a {}x{} patch",
-                                i, finest.width(), finest.height(), m_options.patch_size, m_options.patch_size);
+                    throw_error(
+                        "guidance backend 'exemplar_patch_match': exemplar {} is {}x{} after scaling and "
+                        "rotation, smaller than a {}x{} patch",
+                        i,
+                        finest.width(),
+                        finest.height(),
+                        m_options.patch_size,
+                        m_options.patch_size);
                 variants.push_back(std::move(variant));
             }
         }
@@ -442,7 +460,8 @@ void ExemplarPatchMatchBackend::set_exemplars(std::vector<Image> tangent_normals
 GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request) {
     const std::string where = "guidance backend 'exemplar_patch_match'";
     if (request.kind != GuidanceKind::Tactile)
-        throw_error("{} handles tactile requests only, got a {} request", where, guidance_kind_name(request.kind));
+        throw_error(
+            "{} handles tactile requests only, got a {} request", where, guidance_kind_name(request.kind));
     if (m_variants.empty()) throw_error("{}: no exemplars (set \"exemplars\" in its config)", where);
     validate_request(request, where);
 
@@ -492,13 +511,14 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
                 if (field.empty())
                     field = solver.random_field(mix_seed(request.seed, item, stage));
                 else if (em == 0)
-                    field = solver.upsampled_field(field, previous_width, previous_height,
-                                                   mix_seed(request.seed, item, stage));
+                    field = solver.upsampled_field(
+                        field, previous_width, previous_height, mix_seed(request.seed, item, stage));
                 else
                     solver.refresh(field);
                 for (int s = 0; s < m_options.search_iterations; ++s) {
                     const int jump = 1 << std::max(0, m_options.search_iterations - 1 - s);
-                    field = solver.search_round(field, jump, mix_seed(request.seed, item, stage + 1 + std::uint64_t(s)));
+                    field = solver.search_round(
+                        field, jump, mix_seed(request.seed, item, stage + 1 + std::uint64_t(s)));
                 }
                 estimate = solver.vote(field);
             }
@@ -514,7 +534,8 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
         for (std::size_t p = 0; p < out.pixel_count(); ++p) {
             const float m = mask.data()[p];
             if (m <= 0.0f) continue;
-            for (int c = 0; c < 3; ++c) out.data()[3 * p + std::size_t(c)] = m * previous_result.data()[3 * p + std::size_t(c)];
+            for (int c = 0; c < 3; ++c)
+                out.data()[3 * p + std::size_t(c)] = m * previous_result.data()[3 * p + std::size_t(c)];
         }
         result.refined.push_back(std::move(out));
     }

@@ -75,8 +75,7 @@ ExternalBackend::Options ExternalBackend::Options::from_json(const Json& config)
     } else {
         throw_error("{}: \"command\" must be a string or an array of strings", reader.where());
     }
-    if (o.command.empty() || o.command[0].empty())
-        throw_error("{}: \"command\" is empty", reader.where());
+    if (o.command.empty() || o.command[0].empty()) throw_error("{}: \"command\" is empty", reader.where());
     o.timeout_seconds = reader.get<double>("timeout_seconds", o.timeout_seconds);
     if (!(o.timeout_seconds > 0.0))
         throw_error("{}: timeout_seconds {} must be positive", reader.where(), o.timeout_seconds);
@@ -85,7 +84,8 @@ ExternalBackend::Options ExternalBackend::Options::from_json(const Json& config)
     if (reader.has("kinds")) {
         const Json& kinds = reader.raw("kinds");
         if (!kinds.is_array() || kinds.empty())
-            throw_error("{}: \"kinds\" must be a non-empty array of \"visual\" / \"tactile\"", reader.where());
+            throw_error("{}: \"kinds\" must be a non-empty array of \"visual\" / \"tactile\"",
+                        reader.where());
         o.kinds.clear();
         for (const Json& kind : kinds) {
             if (!kind.is_string())
@@ -132,7 +132,8 @@ Json write_guidance_request(const std::string& folder, const GuidanceRequest& re
     json["count"] = request.images.size();
     json["folder"] = folder;
     json["encodings"] = {
-        {"input", visual ? "8-bit RGB PNG, colour in [0,1] on white" : "8-bit RGB PNG, (n+1)/2 of view-space normals"},
+        {"input",
+         visual ? "8-bit RGB PNG, colour in [0,1] on white" : "8-bit RGB PNG, (n+1)/2 of view-space normals"},
         {"input_exr", "float EXR R,G,B = view-space normal x (right), y (up), z (toward viewer)"},
         {"control", "8-bit RGB PNG, normal-BAE ControlNet control image (red = left, green = up)"},
         {"mask", "8-bit gray PNG, coverage in [0,1], 0 = background"},
@@ -156,7 +157,9 @@ Json write_guidance_request(const std::string& folder, const GuidanceRequest& re
         } else {
             entry["input_exr"] = fmt::format("input_{}.exr", k);
             entry["output_exr"] = fmt::format("refined_{}.exr", k);
-            write_png(dir + entry["input"].get<std::string>(), normals_to_unit_range(request.images[k]), 8,
+            write_png(dir + entry["input"].get<std::string>(),
+                      normals_to_unit_range(request.images[k]),
+                      8,
                       Quantize::Round);
             write_exr(dir + entry["input_exr"].get<std::string>(), request.images[k]);
         }
@@ -186,8 +189,7 @@ GuidanceResult read_guidance_outputs(const std::string& folder, const Json& requ
                 raw_normals = true;
             }
         }
-        if (!fs::exists(path))
-            throw_error("guidance command '{}' did not write '{}'", command, path);
+        if (!fs::exists(path)) throw_error("guidance command '{}' did not write '{}'", command, path);
         Image image;
         try {
             image = read_image(path);
@@ -195,10 +197,17 @@ GuidanceResult read_guidance_outputs(const std::string& folder, const Json& requ
             throw_error("guidance command '{}' wrote an unreadable output: {}", command, e.what());
         }
         if (image.width() != input.width() || image.height() != input.height())
-            throw_error("guidance command '{}' wrote '{}' of size {}x{}, expected {}x{}", command, path,
-                        image.width(), image.height(), input.width(), input.height());
+            throw_error("guidance command '{}' wrote '{}' of size {}x{}, expected {}x{}",
+                        command,
+                        path,
+                        image.width(),
+                        image.height(),
+                        input.width(),
+                        input.height());
         if (image.channels() < 3)
-            throw_error("guidance command '{}' wrote '{}' with {} channel(s), expected RGB", command, path,
+            throw_error("guidance command '{}' wrote '{}' with {} channel(s), expected RGB",
+                        command,
+                        path,
                         image.channels());
         if (image.channels() > 3) image = image.channel_range(0, 3);
         if (!image.all_finite())
@@ -223,9 +232,8 @@ GuidanceResult ExternalBackend::refine(const GuidanceRequest& request) {
     if (!supports(request.kind))
         throw_error("guidance backend 'external' is not configured for {} requests (see \"kinds\")",
                     guidance_kind_name(request.kind));
-    const std::string folder =
-        fmt::format("{}/{}_{:05d}_{:04d}", m_work_folder, guidance_kind_name(request.kind), request.iteration,
-                    m_calls++);
+    const std::string folder = fmt::format(
+        "{}/{}_{:05d}_{:04d}", m_work_folder, guidance_kind_name(request.kind), request.iteration, m_calls++);
     m_last_call_folder = folder;
     std::error_code ec;
     fs::remove_all(folder, ec);  // a stale folder from an earlier run with the same pid
@@ -247,8 +255,11 @@ GuidanceResult ExternalBackend::refine(const GuidanceRequest& request) {
     }
     const std::string command = format_command(argv);
     const std::string stderr_path = folder + "/stderr.txt";
-    log_verbose("guidance: running {} ({} {} image(s), iteration {})", command, request.images.size(),
-                guidance_kind_name(request.kind), request.iteration);
+    log_verbose("guidance: running {} ({} {} image(s), iteration {})",
+                command,
+                request.images.size(),
+                guidance_kind_name(request.kind),
+                request.iteration);
 
     ProcessOutcome outcome;
     try {
@@ -257,14 +268,20 @@ GuidanceResult ExternalBackend::refine(const GuidanceRequest& request) {
         throw_error("guidance backend 'external': {} (call folder kept: {})", e.what(), folder);
     }
     if (outcome.timed_out)
-        throw_error("guidance command '{}' timed out after {} s and was killed (call folder kept: {})", command,
-                    m_options.timeout_seconds, folder);
-    if (outcome.signal != 0)
-        throw_error("guidance command '{}' was killed by signal {} (call folder kept: {}); stderr: {}", command,
-                    outcome.signal, folder, one_line(file_tail(stderr_path)));
-    if (outcome.exit_code != 0)
-        throw_error("guidance command '{}' exited with status {} (call folder kept: {}); stderr: {}", command,
-                    outcome.exit_code, folder, one_line(file_tail(stderr_path)));
+        throw_error("guidance command '{}' timed out after {} s and was killed (call folder kept: {})",
+                    command,
+                    m_options.timeout_seconds,
+                    folder);
+    if (outcome.signal != 0 || outcome.exit_code != 0) {
+        const std::string ended = outcome.signal != 0
+                                      ? fmt::format("was killed by signal {}", outcome.signal)
+                                      : fmt::format("exited with status {}", outcome.exit_code);
+        throw_error("guidance command '{}' {} (call folder kept: {}); stderr: {}",
+                    command,
+                    ended,
+                    folder,
+                    one_line(file_tail(stderr_path)));
+    }
 
     GuidanceResult result = read_guidance_outputs(folder, request_json, request, command);
     log_verbose("guidance: {} finished in {:.2f} s", command, outcome.seconds);

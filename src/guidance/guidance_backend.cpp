@@ -24,8 +24,16 @@ namespace {
 void check_image(const Image& image, int width, int height, int channels, const std::string& where,
                  const char* role, std::size_t index) {
     if (image.width() != width || image.height() != height || image.channels() != channels)
-        throw_error("{}: {} {} is {}x{} with {} channels, expected {}x{} with {}", where, role, index,
-                    image.width(), image.height(), image.channels(), width, height, channels);
+        throw_error("{}: {} {} is {}x{} with {} channels, expected {}x{} with {}",
+                    where,
+                    role,
+                    index,
+                    image.width(),
+                    image.height(),
+                    image.channels(),
+                    width,
+                    height,
+                    channels);
     if (!image.all_finite()) throw_error("{}: {} {} has non-finite values", where, role, index);
 }
 }  // namespace
@@ -37,13 +45,15 @@ void validate_request(const GuidanceRequest& request, const std::string& where) 
     const int height = request.images[0].height();
     if (width <= 0 || height <= 0) throw_error("{}: image 0 is empty", where);
     for (std::size_t i = 0; i < n; ++i) check_image(request.images[i], width, height, 3, where, "image", i);
-    if (request.masks.size() != n)
-        throw_error("{}: {} masks for {} images", where, request.masks.size(), n);
+    if (request.masks.size() != n) throw_error("{}: {} masks for {} images", where, request.masks.size(), n);
     for (std::size_t i = 0; i < n; ++i) check_image(request.masks[i], width, height, 1, where, "mask", i);
     const std::size_t controls = request.kind == GuidanceKind::Visual ? n : 0;
     if (request.control.size() != controls)
         throw_error("{}: {} control images for {} {} images (visual requests need one each, tactile none)",
-                    where, request.control.size(), n, guidance_kind_name(request.kind));
+                    where,
+                    request.control.size(),
+                    n,
+                    guidance_kind_name(request.kind));
     for (std::size_t i = 0; i < controls; ++i)
         check_image(request.control[i], width, height, 3, where, "control image", i);
     if (!(request.strength >= 0.0f && request.strength <= 1.0f))
@@ -52,44 +62,47 @@ void validate_request(const GuidanceRequest& request, const std::string& where) 
 
 void validate_result(const GuidanceRequest& request, const GuidanceResult& result, const std::string& where) {
     if (result.refined.size() != request.images.size())
-        throw_error("{}: {} refined images for {} inputs", where, result.refined.size(),
-                    request.images.size());
+        throw_error(
+            "{}: {} refined images for {} inputs", where, result.refined.size(), request.images.size());
     for (std::size_t i = 0; i < result.refined.size(); ++i) {
         const Image& input = request.images[i];
-        check_image(result.refined[i], input.width(), input.height(), input.channels(), where,
-                    "refined image", i);
+        check_image(
+            result.refined[i], input.width(), input.height(), input.channels(), where, "refined image", i);
     }
 }
 
-Image to_bae_control(const Image& viewspace_normals) {
-    TDF_CHECK_EQ(viewspace_normals.channels(), 3);
-    Image out(viewspace_normals.width(), viewspace_normals.height(), 3);
-    const float* src = viewspace_normals.data();
+namespace {
+/// Applies `convert` to every 3-vector of a 3-channel image.
+template <typename Convert>
+Image map_vectors(const Image& image, Convert convert) {
+    TDF_CHECK_EQ(image.channels(), 3);
+    Image out(image.width(), image.height(), 3);
+    const float* src = image.data();
     float* dst = out.data();
-    for (std::size_t p = 0; p < viewspace_normals.pixel_count(); ++p) {
-        Vec3f n(src[3 * p], src[3 * p + 1], src[3 * p + 2]);
+    for (std::size_t p = 0; p < image.pixel_count(); ++p, src += 3, dst += 3) {
+        const Vec3f v = convert(Vec3f(src[0], src[1], src[2]));
+        dst[0] = v.x, dst[1] = v.y, dst[2] = v.z;
+    }
+    return out;
+}
+}  // namespace
+
+Image to_bae_control(const Image& viewspace_normals) {
+    return map_vectors(viewspace_normals, [](Vec3f n) {
         // Matches reference convert_normal2bae: exact-zero background -> (0,0,1), flip red,
         // F.normalize, (n + 1) / 2 (spec 5.4).
         if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) n = Vec3f(0.0f, 0.0f, 1.0f);
         n.x = -n.x;
-        n = normalize_or_zero(n);
-        for (int c = 0; c < 3; ++c) dst[3 * p + std::size_t(c)] = (n[c] + 1.0f) * 0.5f;
-    }
-    return out;
+        return (normalize_or_zero(n) + Vec3f(1.0f, 1.0f, 1.0f)) * 0.5f;
+    });
 }
 
 Image from_bae_control(const Image& control) {
-    TDF_CHECK_EQ(control.channels(), 3);
-    Image out(control.width(), control.height(), 3);
-    const float* src = control.data();
-    float* dst = out.data();
-    for (std::size_t p = 0; p < control.pixel_count(); ++p) {
-        Vec3f n(src[3 * p] * 2.0f - 1.0f, src[3 * p + 1] * 2.0f - 1.0f, src[3 * p + 2] * 2.0f - 1.0f);
+    return map_vectors(control, [](Vec3f c) {
+        Vec3f n = c * 2.0f - Vec3f(1.0f, 1.0f, 1.0f);
         n.x = -n.x;
-        n = normalize_or_zero(n);
-        for (int c = 0; c < 3; ++c) dst[3 * p + std::size_t(c)] = n[c];
-    }
-    return out;
+        return normalize_or_zero(n);
+    });
 }
 
 std::vector<std::string> GuidanceBackend::names() {
@@ -105,7 +118,8 @@ std::unique_ptr<GuidanceBackend> GuidanceBackend::create(const std::string& name
         return nullptr;
     }
     if (name == ExemplarPatchMatchBackend::kName)
-        return std::make_unique<ExemplarPatchMatchBackend>(ExemplarPatchMatchBackend::Options::from_json(object));
+        return std::make_unique<ExemplarPatchMatchBackend>(
+            ExemplarPatchMatchBackend::Options::from_json(object));
     if (name == ReliefShadingBackend::kName)
         return std::make_unique<ReliefShadingBackend>(ReliefShadingBackend::Options::from_json(object));
     if (name == ExternalBackend::kName)

@@ -30,9 +30,11 @@ std::vector<std::string> save_guidance_frames(const std::string& folder, int ite
         } else {
             save("rendered_perturb_normals", k, normals_for_display(request.images[k]));
         }
-        if (k < request.masks.size()) save(visual ? "rendered_masks" : "rendered_masks_patch", k, request.masks[k]);
+        if (k < request.masks.size())
+            save(visual ? "rendered_masks" : "rendered_masks_patch", k, request.masks[k]);
         if (k < result.refined.size())
-            save(visual ? "controlnet_refined_images" : "rendered_guidance_perturb_normals", k,
+            save(visual ? "controlnet_refined_images" : "rendered_guidance_perturb_normals",
+                 k,
                  visual ? result.refined[k] : normals_for_display(result.refined[k]));
     }
     return written;

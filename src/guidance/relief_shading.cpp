@@ -85,7 +85,8 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
             const float k = scale > 0.0f ? std::clamp(curvature.data()[p] / scale, -1.0f, 1.0f) : 0.0f;
             for (int c = 0; c < 3; ++c) {
                 const float mean = local_mean.data()[3 * p + std::size_t(c)];
-                relief.data()[3 * p + std::size_t(c)] = m_options.contrast * k * (k >= 0.0f ? 1.0f - mean : mean);
+                relief.data()[3 * p + std::size_t(c)] =
+                    m_options.contrast * k * (k >= 0.0f ? 1.0f - mean : mean);
             }
         }
         const Image relief_mean = gaussian_blur_masked(relief, mask, m_options.detail_sigma);

@@ -161,10 +161,11 @@ MultiPartPrompt multi_part_prompt(const std::string& mesh_obj, const std::string
         result.part_b_token = e.token_b;
         return result;
     }
-    throw_error("mesh '{}' has no multi-part description (the reference knows a_table_tennis_racket, "
-                "a_gold_goat_sculpture, a_potted_cactus, lamp1, lamp3, a_cactus_in_a_pot_2, "
-                "a_cactus_in_a_pot_3)",
-                mesh_obj);
+    throw_error(
+        "mesh '{}' has no multi-part description (the reference knows a_table_tennis_racket, "
+        "a_gold_goat_sculpture, a_potted_cactus, lamp1, lamp3, a_cactus_in_a_pot_2, "
+        "a_cactus_in_a_pot_3)",
+        mesh_obj);
 }
 
 }  // namespace tdf

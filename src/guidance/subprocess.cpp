@@ -47,7 +47,8 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
     args.push_back(nullptr);
 
     int report[2];
-    if (pipe2(report, O_CLOEXEC) != 0) throw_error("cannot run '{}': pipe: {}", argv[0], std::strerror(errno));
+    if (pipe2(report, O_CLOEXEC) != 0)
+        throw_error("cannot run '{}': pipe: {}", argv[0], std::strerror(errno));
 
     const auto start = std::chrono::steady_clock::now();
     const pid_t pid = fork();
@@ -86,13 +87,19 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
         waitpid(pid, &ignored, 0);
         switch (failure.step) {
             case 0:
-                throw_error("cannot run '{}': cannot enter folder '{}': {}", argv[0], working_folder,
+                throw_error("cannot run '{}': cannot enter folder '{}': {}",
+                            argv[0],
+                            working_folder,
                             std::strerror(failure.error));
             case 1:
-                throw_error("cannot run '{}': cannot create '{}': {}", argv[0], stdout_path,
+                throw_error("cannot run '{}': cannot create '{}': {}",
+                            argv[0],
+                            stdout_path,
                             std::strerror(failure.error));
             case 2:
-                throw_error("cannot run '{}': cannot create '{}': {}", argv[0], stderr_path,
+                throw_error("cannot run '{}': cannot create '{}': {}",
+                            argv[0],
+                            stderr_path,
                             std::strerror(failure.error));
             default:
                 throw_error("cannot run '{}': {}", argv[0], std::strerror(failure.error));
@@ -108,7 +115,8 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
     while (true) {
         const pid_t done = waitpid(pid, &status, WNOHANG);
         if (done == pid) break;
-        if (done < 0 && errno != EINTR) throw_error("waiting for '{}' failed: {}", argv[0], std::strerror(errno));
+        if (done < 0 && errno != EINTR)
+            throw_error("waiting for '{}' failed: {}", argv[0], std::strerror(errno));
         if (std::chrono::steady_clock::now() >= deadline) {
             kill(-pid, SIGKILL);
             while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {

@@ -57,7 +57,8 @@ tdf::Image resized_output(const tdf::Image& image, const Settings& settings) {
     tdf::Image out(width, image.height(), channels);
     for (int y = 0; y < image.height(); ++y)
         for (int x = 0; x < width; ++x)
-            for (int c = 0; c < channels; ++c) out.at(x, y, c) = image.at(std::min(x, image.width() - 1), y, c);
+            for (int c = 0; c < channels; ++c)
+                out.at(x, y, c) = image.at(std::min(x, image.width() - 1), y, c);
     return out;
 }
 
@@ -76,7 +77,8 @@ int run(const Settings& settings) {
     for (std::size_t k = 0; k < images.size(); ++k) {
         const auto& entry = images[k];
         // Visual inputs are colours; tactile inputs are read from the raw EXR.
-        const std::string input_file = folder + "/" + entry.at(visual ? "input" : "input_exr").get<std::string>();
+        const std::string input_file =
+            folder + "/" + entry.at(visual ? "input" : "input_exr").get<std::string>();
         tdf::Image input = tdf::read_image(input_file);
         if (input.width() != width || input.height() != height || input.channels() < 3)
             return fail(input_file + ": unexpected size or channels");
@@ -90,13 +92,15 @@ int run(const Settings& settings) {
         if (int(k) == settings.skip_output) continue;
         const tdf::Image refined = resized_output(transform(input, visual), settings);
         if (visual) {
-            tdf::write_png(folder + "/" + entry.at("output").get<std::string>(), refined, 8, tdf::Quantize::Round);
+            tdf::write_png(
+                folder + "/" + entry.at("output").get<std::string>(), refined, 8, tdf::Quantize::Round);
         } else if (settings.exr) {
             tdf::write_exr(folder + "/" + entry.at("output_exr").get<std::string>(), refined);
         } else {
             tdf::Image encoded = refined;
             for (float& v : encoded.values()) v = (v + 1.0f) * 0.5f;
-            tdf::write_png(folder + "/" + entry.at("output").get<std::string>(), encoded, 16, tdf::Quantize::Round);
+            tdf::write_png(
+                folder + "/" + entry.at("output").get<std::string>(), encoded, 16, tdf::Quantize::Round);
         }
     }
     std::printf("tdf_test_refiner: wrote %zu %s output(s)\n", images.size(), kind.c_str());

@@ -85,7 +85,7 @@ TEST(GuidanceFactory, NoneMeansDisabledAndUnknownNamesAreErrors) {
     EXPECT_TRUE(relief->supports(GuidanceKind::Visual));
     EXPECT_FALSE(relief->supports(GuidanceKind::Tactile));
     EXPECT_THROW(GuidanceBackend::create("relief_shading", Json{{"gian", 0.5}}), Error);  // misspelt key
-    EXPECT_THROW(GuidanceBackend::create("external", Json::object()), Error);            // no command
+    EXPECT_THROW(GuidanceBackend::create("external", Json::object()), Error);             // no command
     EXPECT_EQ(GuidanceBackend::names().front(), "none");
 }
 

@@ -59,10 +59,12 @@ Image smooth_normals(int size, std::uint64_t seed) {
     Image n(size, size, 3);
     Rng rng(seed);
     for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x) set_normal(n, x, y, Vec3f(0.3f * rng.normal(), 0.3f * rng.normal(), 1.0f));
+        for (int x = 0; x < size; ++x)
+            set_normal(n, x, y, Vec3f(0.3f * rng.normal(), 0.3f * rng.normal(), 1.0f));
     n = gaussian_blur_masked(n, Image(), 3.0f);
     for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x) set_normal(n, x, y, Vec3f(n.at(x, y, 0), n.at(x, y, 1), n.at(x, y, 2)));
+        for (int x = 0; x < size; ++x)
+            set_normal(n, x, y, Vec3f(n.at(x, y, 0), n.at(x, y, 1), n.at(x, y, 2)));
     return n;
 }
 
@@ -148,19 +150,28 @@ TEST(GuidanceExemplarPatchMatch, ExemplarStatisticsMoveTowardTheExemplar) {
     // The optimizer's effect, abstracted: each guidance iteration moves the normals half way to the
     // target and renormalizes. Without guidance they stay as they are (statistics unchanged).
     for (int i = 0; i < 6; ++i) {
-        const Image target = backend.refine(tactile_request(normals, mask, 100 + std::uint64_t(i))).refined[0];
+        const Image target =
+            backend.refine(tactile_request(normals, mask, 100 + std::uint64_t(i))).refined[0];
         for (int y = 0; y < size; ++y)
             for (int x = 0; x < size; ++x) {
                 const float* t = target.pixel(x, y);
                 const float* n = normals.pixel(x, y);
-                set_normal(normals, x, y,
-                           Vec3f(n[0] + 0.5f * (t[0] - n[0]), n[1] + 0.5f * (t[1] - n[1]), n[2] + 0.5f * (t[2] - n[2])));
+                set_normal(normals,
+                           x,
+                           y,
+                           Vec3f(n[0] + 0.5f * (t[0] - n[0]),
+                                 n[1] + 0.5f * (t[1] - n[1]),
+                                 n[2] + 0.5f * (t[2] - n[2])));
             }
     }
     const double nn_after = backend.mean_nearest_patch_distance(normals, mask);
     const double tilt_after = tilt_histogram_distance(normals, exemplar);
-    std::printf("nearest-patch distance %.4f -> %.4f, tilt histogram L1 %.3f -> %.3f (no guidance: unchanged)\n",
-                nn_before, nn_after, tilt_before, tilt_after);
+    std::printf(
+        "nearest-patch distance %.4f -> %.4f, tilt histogram L1 %.3f -> %.3f (no guidance: unchanged)\n",
+        nn_before,
+        nn_after,
+        tilt_before,
+        tilt_after);
     EXPECT_LT(nn_after, 0.25 * nn_before);
     EXPECT_LT(tilt_after, 0.5 * tilt_before);
 }
@@ -212,9 +223,11 @@ TEST(GuidanceExemplarPatchMatch, ConfigAndRequestErrors) {
     EXPECT_THROW(Options::from_json(Json{{"rotations", 3}}), Error);
     EXPECT_THROW(Options::from_json(Json{{"exemplars", "a.png"}}), Error);
     EXPECT_THROW(Options::from_json(Json{{"levls", 2}}), Error);
-    EXPECT_THROW(Options::from_json(Json{{"exemplars", Json::array({"/nonexistent/x.png"})}}).exemplar_files.at(1),
-                 std::out_of_range);
-    EXPECT_THROW(GuidanceBackend::create("exemplar_patch_match", Json{{"exemplars", Json::array({"/nonexistent/x.png"})}}),
+    EXPECT_THROW(
+        Options::from_json(Json{{"exemplars", Json::array({"/nonexistent/x.png"})}}).exemplar_files.at(1),
+        std::out_of_range);
+    EXPECT_THROW(GuidanceBackend::create("exemplar_patch_match",
+                                         Json{{"exemplars", Json::array({"/nonexistent/x.png"})}}),
                  Error);
 
     ExemplarPatchMatchBackend backend(small_options());
@@ -230,7 +243,8 @@ TEST(GuidanceExemplarPatchMatch, ConfigAndRequestErrors) {
 
 TEST(GuidanceExemplarPatchMatch, RealTactileSamplePullsSmoothNormalsTowardIt) {
     TDF_REQUIRE_SHARED_DATA("tactile/texture_samples/avocado_00000.png");
-    const Image sample = read_normal_map(test::shared_data_dir() + "/tactile/texture_samples/avocado_00000.png");
+    const Image sample =
+        read_normal_map(test::shared_data_dir() + "/tactile/texture_samples/avocado_00000.png");
     ASSERT_EQ(sample.width(), 240);
     // Exemplar: the top-left 96x96 of the capture. Target: a disjoint 32x32 region, rotated by
     // 90 degrees and blurred (a smooth field that only knows the coarse relief).
@@ -246,7 +260,8 @@ TEST(GuidanceExemplarPatchMatch, RealTactileSamplePullsSmoothNormalsTowardIt) {
         for (std::size_t k = 0; k < target.values().size(); ++k)
             target.values()[k] += 0.5f * (refined.values()[k] - target.values()[k]);
         for (int y = 0; y < 32; ++y)
-            for (int x = 0; x < 32; ++x) set_normal(target, x, y, Vec3f(target.at(x, y, 0), target.at(x, y, 1), target.at(x, y, 2)));
+            for (int x = 0; x < 32; ++x)
+                set_normal(target, x, y, Vec3f(target.at(x, y, 0), target.at(x, y, 1), target.at(x, y, 2)));
     }
     const double after = backend.mean_nearest_patch_distance(target, mask);
     std::printf("avocado: nearest exemplar patch distance %.5f -> %.5f\n", before, after);

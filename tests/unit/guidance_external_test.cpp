@@ -41,7 +41,8 @@ GuidanceRequest visual_request(int width = 12, int height = 10) {
         Image colour(width, height, 3), normals(width, height, 3), mask(width, height, 1, 1.0f);
         for (int y = 0; y < height; ++y)
             for (int x = 0; x < width; ++x) {
-                for (int c = 0; c < 3; ++c) colour.at(x, y, c) = float((x * 7 + y * 3 + c * 5 + k * 11) % 16) / 15.0f;
+                for (int c = 0; c < 3; ++c)
+                    colour.at(x, y, c) = float((x * 7 + y * 3 + c * 5 + k * 11) % 16) / 15.0f;
                 normals.at(x, y, 2) = 1.0f;
             }
         mask.at(0, 0, 0) = 0.0f;  // one background pixel
@@ -91,7 +92,8 @@ TEST(GuidanceExternal, VisualRoundTripAppliesTheProgramsTransform) {
                 for (int c = 0; c < 3; ++c) {
                     // Background (mask exactly 0) is forced to white; elsewhere 1 - input, 8-bit.
                     const float expected = x == 0 && y == 0 ? 1.0f : 1.0f - request.images[k].at(x, y, c);
-                    max_error = std::max(max_error, double(std::abs(result.refined[k].at(x, y, c) - expected)));
+                    max_error =
+                        std::max(max_error, double(std::abs(result.refined[k].at(x, y, c) - expected)));
                 }
     EXPECT_LE(max_error, 0.5 / 255.0 + 1e-6) << "max error " << max_error;
     // The call folder is removed after success unless keep_files is set.
@@ -127,8 +129,8 @@ TEST(GuidanceExternal, RequestJsonDescribesTheCall) {
 TEST(GuidanceExternal, TactileRoundTripThroughExrAndPng) {
     const GuidanceRequest request = tactile_request();
     for (const char* format : {"exr", "png"}) {
-        auto backend = GuidanceBackend::create("external", config_for(std::string("tactile_") + format,
-                                                                      {"--format", format}));
+        auto backend = GuidanceBackend::create(
+            "external", config_for(std::string("tactile_") + format, {"--format", format}));
         const GuidanceResult result = backend->refine(request);
         ASSERT_EQ(result.refined.size(), 1u);
         double max_error = 0.0;
@@ -136,7 +138,9 @@ TEST(GuidanceExternal, TactileRoundTripThroughExrAndPng) {
             for (int x = 0; x < 9; ++x) {
                 const float* in = request.images[0].pixel(x, y);
                 const float* out = result.refined[0].pixel(x, y);
-                max_error = std::max({max_error, double(std::abs(out[0] + in[0])), double(std::abs(out[1] + in[1])),
+                max_error = std::max({max_error,
+                                      double(std::abs(out[0] + in[0])),
+                                      double(std::abs(out[1] + in[1])),
                                       double(std::abs(out[2] - in[2]))});
             }
         // EXR is exact; the 16-bit PNG output is quantised (the input PNG is not used by the program).
@@ -191,7 +195,8 @@ TEST(GuidanceExternal, MissingWrongSizeAndGrayOutputsAreErrors) {
 }
 
 TEST(GuidanceExternal, UnknownProgramAndUnsupportedKind) {
-    Json config{{"command", Json::array({"tdf-no-such-program-xyz"})}, {"work_folder", work_folder("nosuch")}};
+    Json config{{"command", Json::array({"tdf-no-such-program-xyz"})},
+                {"work_folder", work_folder("nosuch")}};
     auto backend = GuidanceBackend::create("external", config);
     const std::string message = error_of(*backend, visual_request());
     EXPECT_NE(message.find("cannot run 'tdf-no-such-program-xyz'"), std::string::npos) << message;
@@ -207,9 +212,11 @@ TEST(GuidanceExternal, ConfigErrors) {
     EXPECT_THROW(ExternalBackend::Options::from_json(Json{{"command", 3}}), Error);
     EXPECT_THROW(ExternalBackend::Options::from_json(Json{{"command", ""}}), Error);
     EXPECT_THROW(ExternalBackend::Options::from_json(Json{{"command", "sd"}, {"timeout_seconds", 0}}), Error);
-    EXPECT_THROW(ExternalBackend::Options::from_json(Json{{"command", Json::array({"sd"})}, {"shell", true}}), Error);
-    EXPECT_THROW(ExternalBackend::Options::from_json(Json{{"command", "sd"}, {"kinds", Json::array({"audio"})}}),
+    EXPECT_THROW(ExternalBackend::Options::from_json(Json{{"command", Json::array({"sd"})}, {"shell", true}}),
                  Error);
+    EXPECT_THROW(
+        ExternalBackend::Options::from_json(Json{{"command", "sd"}, {"kinds", Json::array({"audio"})}}),
+        Error);
     EXPECT_THROW(ExternalBackend::Options::from_json(Json{{"command", "sd"}, {"timeout", 5}}), Error);
     const auto o = ExternalBackend::Options::from_json(Json{{"command", "sd  -M img2img --strength 0.5"}});
     EXPECT_EQ(o.command, (std::vector<std::string>{"sd", "-M", "img2img", "--strength", "0.5"}));
@@ -219,7 +226,10 @@ TEST(GuidanceSubprocess, ReportsExitCodesAndTails) {
     const std::string folder = work_folder("subprocess");
     fs::create_directories(folder);
     const ProcessOutcome ok = run_process({"/bin/sh", "-c", "echo one; echo two >&2; echo three >&2; exit 4"},
-                                          folder, 30.0, folder + "/out.txt", folder + "/err.txt");
+                                          folder,
+                                          30.0,
+                                          folder + "/out.txt",
+                                          folder + "/err.txt");
     EXPECT_FALSE(ok.timed_out);
     EXPECT_EQ(ok.exit_code, 4);
     EXPECT_EQ(file_tail(folder + "/err.txt", 1), "three");

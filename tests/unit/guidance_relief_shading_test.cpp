@@ -106,8 +106,8 @@ TEST(GuidanceReliefShading, BackgroundIsWhiteAndUniformColourOnFlatGeometryStays
     ReliefShadingBackend backend({});
     const GuidanceResult result = backend.refine(r);
     ASSERT_EQ(result.refined.size(), 1u);
-    EXPECT_EQ(result.refined[0].at(0, 0, 1), 1.0f);                 // mask 0 -> white
-    EXPECT_NEAR(result.refined[0].at(32, 32, 1), 0.3f, 1e-6f);      // no curvature -> unchanged
+    EXPECT_EQ(result.refined[0].at(0, 0, 1), 1.0f);             // mask 0 -> white
+    EXPECT_NEAR(result.refined[0].at(32, 32, 1), 0.3f, 1e-6f);  // no curvature -> unchanged
     r.kind = GuidanceKind::Tactile;
     EXPECT_THROW(backend.refine(r), Error);
 }
@@ -152,8 +152,10 @@ TEST(GuidanceReliefShading, ColourGeometryAlignmentRisesOverARun) {
         }
     }
     const double after = colour_geometry_correlation(albedo, normals, mask);
-    std::printf("colour-geometry correlation: %.3f without guidance, %.3f after 50 relief_shading iterations\n",
-                before, after);
+    std::printf(
+        "colour-geometry correlation: %.3f without guidance, %.3f after 50 relief_shading iterations\n",
+        before,
+        after);
     EXPECT_LT(std::abs(before), 0.2);
     EXPECT_GT(after, 0.6);
     // The refinement adds relief detail; it keeps the local mean colour and the value range.

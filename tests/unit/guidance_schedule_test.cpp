@@ -33,8 +33,17 @@ TEST(GuidanceSchedule, DdimTimestepsAreLeadingWithOffsetOne) {
 
 TEST(GuidanceSchedule, VisualStartTimestepTableMatchesSpec) {
     // Spec 5.4: counts of the start timestep over the 50 refinement iterations i = 150..199.
-    const std::map<int, int> expected = {{481, 4}, {461, 5}, {441, 6}, {421, 5}, {401, 4}, {381, 5},
-                                         {361, 6}, {341, 5}, {321, 4}, {301, 5}, {281, 1}};
+    const std::map<int, int> expected = {{481, 4},
+                                         {461, 5},
+                                         {441, 6},
+                                         {421, 5},
+                                         {401, 4},
+                                         {381, 5},
+                                         {361, 6},
+                                         {341, 5},
+                                         {321, 4},
+                                         {301, 5},
+                                         {281, 1}};
     std::map<int, int> counts;
     for (int i = 150; i < 200; ++i) ++counts[ddim_start_timestep(visual_guidance_strength(i))];
     EXPECT_EQ(counts, expected);
@@ -92,9 +101,10 @@ TEST(GuidancePrompt, SingleTexturePromptMatchesSpecExample) {
 
 TEST(GuidancePrompt, MultiPartPromptHasPartsAndTokenIndices) {
     const MultiPartPrompt p = multi_part_prompt("a_cactus_in_a_pot_3", "Orange", "OrangeGlove");
-    EXPECT_EQ(p.prompt,
-              "a cactus in a pot, cactus with orange texture, pot with heat resistant rubber with heart-shape "
-              "pattern texture, highly detailed, hd, best quality, front lighting");
+    EXPECT_EQ(
+        p.prompt,
+        "a cactus in a pot, cactus with orange texture, pot with heat resistant rubber with heart-shape "
+        "pattern texture, highly detailed, hd, best quality, front lighting");
     EXPECT_EQ(p.part_a_token, 2);
     EXPECT_EQ(p.part_b_token, 5);
     EXPECT_THROW(multi_part_prompt("a_teapot", "Orange", "Corn"), Error);

@@ -87,8 +87,7 @@ void validate_request(const GuidanceRequest& request, const std::string& where);
 
 /// Checks a result against its request: N images, each of the input's size and channel count,
 /// finite values. Throws tdf::Error naming `where` (e.g. the backend or the file).
-void validate_result(const GuidanceRequest& request, const GuidanceResult& result,
-                     const std::string& where);
+void validate_result(const GuidanceRequest& request, const GuidanceResult& result, const std::string& where);
 
 /// Converts view-space normals (3 channels, OpenGL camera convention x right, y up, z toward the
 /// viewer, [-1, 1]) to the control image of the normal-BAE ControlNet.

@@ -20,7 +20,6 @@ namespace tdf {
 /// reference's `astype(uint8)` (spec 13.20); full resolution (the reference resizes to 256).
 /// `result` may be empty (inputs only, e.g. when the backend failed). Returns the paths written.
 std::vector<std::string> save_guidance_frames(const std::string& folder, int iteration,
-                                              const GuidanceRequest& request,
-                                              const GuidanceResult& result);
+                                              const GuidanceRequest& request, const GuidanceResult& result);
 
 }  // namespace tdf
