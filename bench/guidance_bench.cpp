@@ -47,7 +47,7 @@ void BM_ExemplarPatchMatch(benchmark::State& state) {
     backend.set_exemplars({exemplar()});
     GuidanceRequest request;
     request.kind = GuidanceKind::Tactile;
-    request.strength = 0.8f;
+    request.strength = 0.8;
     request.images = {smooth_normals(size)};
     request.masks = {Image(size, size, 1, 1.0f)};
     for (auto _ : state) benchmark::DoNotOptimize(backend.refine(request));
@@ -60,7 +60,7 @@ void BM_ReliefShading(benchmark::State& state) {
     ReliefShadingBackend backend({});
     GuidanceRequest request;
     request.kind = GuidanceKind::Visual;
-    request.strength = 0.5f;
+    request.strength = 0.5;
     request.images = {Image(size, size, 3, 0.6f)};
     request.control = {to_bae_control(smooth_normals(size))};
     request.masks = {Image(size, size, 1, 1.0f)};

@@ -56,7 +56,7 @@ void validate_request(const GuidanceRequest& request, const std::string& where) 
                     guidance_kind_name(request.kind));
     for (std::size_t i = 0; i < controls; ++i)
         check_image(request.control[i], width, height, 3, where, "control image", i);
-    if (!(request.strength >= 0.0f && request.strength <= 1.0f))
+    if (!(request.strength >= 0.0 && request.strength <= 1.0))
         throw_error("{}: guidance strength {} is outside [0, 1]", where, request.strength);
 }
 

@@ -10,6 +10,12 @@
 
 namespace tdf {
 
+namespace {
+/// Divergence below which a pixel counts as flat (1 / pixel): a normal turning by 0.06 degrees
+/// per pixel, far below visible relief and above float noise.
+constexpr float kFlatCurvature = 1e-3f;
+}  // namespace
+
 ReliefShadingBackend::Options ReliefShadingBackend::Options::from_json(const Json& config) {
     ConfigReader reader(config, "guidance backend 'relief_shading'");
     Options o;
@@ -68,9 +74,13 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
         const Image curvature =
             normal_divergence(from_bae_control(request.control[item]), mask, m_options.curvature_sigma);
 
+        // Normalise by a quantile over the curved foreground pixels only, so sparse relief on a
+        // flat surface is not drowned by the zeros; a flat surface has none and stays unchanged.
         std::vector<float> magnitudes;
-        for (std::size_t p = 0; p < curvature.pixel_count(); ++p)
-            if (mask.data()[p] >= 0.5f) magnitudes.push_back(std::abs(curvature.data()[p]));
+        for (std::size_t p = 0; p < curvature.pixel_count(); ++p) {
+            const float magnitude = std::abs(curvature.data()[p]);
+            if (mask.data()[p] >= 0.5f && magnitude > kFlatCurvature) magnitudes.push_back(magnitude);
+        }
         float scale = 0.0f;
         if (!magnitudes.empty()) {
             const auto rank = std::size_t(double(magnitudes.size() - 1) * m_options.curvature_percentile);

@@ -67,7 +67,7 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
         if (err < 0) child_fail(report[1], 2);
         dup2(out, STDOUT_FILENO);
         dup2(err, STDERR_FILENO);
-        const int null_in = open("/dev/null", O_RDONLY);
+        const int null_in = open("/dev/null", O_RDONLY | O_CLOEXEC);
         if (null_in >= 0) dup2(null_in, STDIN_FILENO);
         execvp(args[0], args.data());
         child_fail(report[1], 3);

@@ -62,7 +62,7 @@ TEST(GuidanceRequestCheck, RejectsMismatchedShapes) {
     EXPECT_THROW(validate_request(r, "test"), Error);
     r.control.clear();
     EXPECT_NO_THROW(validate_request(r, "test"));
-    r.strength = 1.5f;
+    r.strength = 1.5;
     EXPECT_THROW(validate_request(r, "test"), Error);
     r = small_visual_request();
     r.images[0].at(1, 1, 1) = std::nanf("");

@@ -89,7 +89,7 @@ double tilt_histogram_distance(const Image& a, const Image& b) {
 GuidanceRequest tactile_request(const Image& normals, const Image& mask, std::uint64_t seed = 5) {
     GuidanceRequest r;
     r.kind = GuidanceKind::Tactile;
-    r.strength = 0.8f;
+    r.strength = 0.8;
     r.seed = seed;
     r.images = {normals};
     r.masks = {mask};

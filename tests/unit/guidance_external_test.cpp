@@ -3,6 +3,7 @@
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/guidance/external_backend.h>
+#include <tdf/guidance/schedule.h>
 #include <tdf/guidance/subprocess.h>
 #include <tdf/io/image_io.h>
 
@@ -34,7 +35,7 @@ GuidanceRequest visual_request(int width = 12, int height = 10) {
     GuidanceRequest r;
     r.kind = GuidanceKind::Visual;
     r.prompt = "an avocado with avocado skin's texture";
-    r.strength = 0.504f;
+    r.strength = 0.504;
     r.iteration = 150;
     r.seed = 7;
     for (int k = 0; k < 2; ++k) {
@@ -57,7 +58,7 @@ GuidanceRequest tactile_request() {
     GuidanceRequest r;
     r.kind = GuidanceKind::Tactile;
     r.prompt = "sks normal map";
-    r.strength = 0.8f;
+    r.strength = 0.8;
     r.iteration = 151;
     Image normals(9, 9, 3), mask(9, 9, 1, 1.0f);
     for (int y = 0; y < 9; ++y)
@@ -124,6 +125,15 @@ TEST(GuidanceExternal, RequestJsonDescribesTheCall) {
     EXPECT_TRUE(fs::exists(folder + "/control_1.png"));
     EXPECT_TRUE(fs::exists(folder + "/refined_1.png"));
     EXPECT_NE(read_text_file(folder + "/stdout.txt").find("wrote 2 visual"), std::string::npos);
+
+    // At i = 154 the schedule crosses a DDIM step (spec 5.4): start 461, not 481.
+    GuidanceRequest later = visual_request();
+    later.iteration = 154;
+    later.strength = visual_guidance_strength(154);
+    backend.refine(later);
+    const Json json154 = load_json_file(backend.last_call_folder() + "/request.json");
+    EXPECT_EQ(json154["start_timestep"], 461);
+    EXPECT_EQ(json154["strength"].get<double>(), later.strength);
 }
 
 TEST(GuidanceExternal, TactileRoundTripThroughExrAndPng) {

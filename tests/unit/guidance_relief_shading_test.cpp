@@ -96,7 +96,7 @@ TEST(GuidanceReliefShading, DivergenceIsPositiveOnBumpsNegativeInDimples) {
 TEST(GuidanceReliefShading, BackgroundIsWhiteAndUniformColourOnFlatGeometryStays) {
     GuidanceRequest r;
     r.kind = GuidanceKind::Visual;
-    r.strength = 0.5f;
+    r.strength = 0.5;
     Image flat(kSize, kSize, 3, 0.0f);
     for (int y = 0; y < kSize; ++y)
         for (int x = 0; x < kSize; ++x) flat.at(x, y, 2) = 1.0f;
@@ -110,6 +110,29 @@ TEST(GuidanceReliefShading, BackgroundIsWhiteAndUniformColourOnFlatGeometryStays
     EXPECT_NEAR(result.refined[0].at(32, 32, 1), 0.3f, 1e-6f);  // no curvature -> unchanged
     r.kind = GuidanceKind::Tactile;
     EXPECT_THROW(backend.refine(r), Error);
+}
+
+TEST(GuidanceReliefShading, SparseReliefOnAFlatSurfaceIsShaded) {
+    // One bump and one dimple on an otherwise flat surface: most curvatures are 0, so the
+    // normalisation must use the curved pixels only.
+    std::vector<float> h(std::size_t(kSize * kSize), 0.0f);
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            const auto g = [&](float cx, float cy) {
+                return std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / 8.0f);
+            };
+            h[std::size_t(y * kSize + x)] = 3.0f * g(20, 20) - 3.0f * g(44, 44);
+        }
+    GuidanceRequest r;
+    r.kind = GuidanceKind::Visual;
+    r.strength = 0.504;
+    r.images = {Image(kSize, kSize, 3, 0.5f)};
+    r.control = {to_bae_control(normals_of_height(h, kSize))};
+    r.masks = {Image(kSize, kSize, 1, 1.0f)};
+    const Image out = ReliefShadingBackend({}).refine(r).refined[0];
+    EXPECT_GT(out.at(20, 20, 0), 0.55f);         // ridge lighter
+    EXPECT_LT(out.at(44, 44, 0), 0.45f);         // cavity darker
+    EXPECT_NEAR(out.at(5, 58, 0), 0.5f, 1e-6f);  // flat and far: unchanged
 }
 
 TEST(GuidanceReliefShading, ColourGeometryAlignmentRisesOverARun) {
@@ -140,7 +163,7 @@ TEST(GuidanceReliefShading, ColourGeometryAlignmentRisesOverARun) {
     double previous = before;
     for (int i = 150; i < 200; ++i) {
         request.images = {albedo};
-        request.strength = float(visual_guidance_strength(i));
+        request.strength = visual_guidance_strength(i);
         request.iteration = i;
         const Image target = backend.refine(request).refined[0];
         for (std::size_t k = 0; k < albedo.values().size(); ++k)

@@ -65,8 +65,10 @@ struct GuidanceRequest {
     /// LESS noise and a target closer to the input. Visual: 0.5 -> 0.7 over the refinement
     /// (visual_guidance_strength()); tactile: constant 0.8 (kTactileGuidanceStrength).
     /// denoise_fraction() converts it to the usual img2img "strength" (fraction of the schedule
-    /// that is denoised, diffusers and stable-diffusion.cpp semantics).
-    float strength = 0.5f;
+    /// that is denoised, diffusers and stable-diffusion.cpp semantics). Double precision on
+    /// purpose: the floor in int(50 * strength) must see the reference's double value (a float
+    /// turns 0.52 into 0.51999998 and starts one step earlier, spec 13.21).
+    double strength = 0.5;
     /// Loop index i of the optimization (0-based, spec 5.1), for logging and file names.
     int iteration = 0;
     /// Seed for any random draw the backend makes (noise, search initialisation).

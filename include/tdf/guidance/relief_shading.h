@@ -12,8 +12,9 @@
 ///     foreground (mask-weighted, so the silhouette does not bleed in).
 ///  2. Curvature k = divergence of the (x, y) normal field, d n_x / d x + d n_y / d y with y up
 ///     (> 0 on ridges and bumps, < 0 in cavities), central differences, 0 where a neighbour is
-///     background; divided by the `curvature_percentile` quantile of |k| over the foreground and
-///     clamped to [-1, 1] (so the effect does not depend on resolution or relief height).
+///     background; divided by the `curvature_percentile` quantile of |k| over the curved
+///     foreground pixels (|k| > 1e-3 per pixel) and clamped to [-1, 1] (so the effect does not
+///     depend on resolution or relief height; a flat surface gets no relief).
 ///  3. The render c is split into its local mean L (mask-weighted Gaussian, `detail_sigma`
 ///     pixels) and detail c - L. The relief detail is R = contrast k (1 - L) on ridges and
 ///     contrast k L in cavities, minus its own local mean (so it is pure detail and the local
@@ -39,7 +40,7 @@ public:
         float detail_sigma = 3.0f;
         /// "curvature_sigma": Gaussian smoothing of the normals before differentiation, pixels.
         float curvature_sigma = 1.0f;
-        /// "curvature_percentile": quantile of |curvature| mapped to 1, in (0, 1].
+        /// "curvature_percentile": quantile of |curvature| (over curved pixels) mapped to 1, (0, 1].
         float curvature_percentile = 0.9f;
 
         /// Reads the keys above; throws tdf::Error for unknown keys or bad values.
