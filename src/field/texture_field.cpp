@@ -62,6 +62,13 @@ TextureField::TextureField(const FieldConfig& config, const FieldDomain& domain,
     for (std::size_t i = m_head_offset; i < offset; ++i) m_parameters[i] = rng.uniform(-bound, bound);
 }
 
+void TextureField::set_parameters(const std::vector<float>& values, const std::string& what) {
+    if (values.size() != m_parameters.size())
+        throw_error("{}: holds {} field parameters, but this field configuration has {}", what, values.size(),
+                    m_parameters.size());
+    m_parameters = values;
+}
+
 const ParameterBlock& TextureField::parameter_block(const std::string& name) const {
     for (const ParameterBlock& b : m_blocks)
         if (b.name == name) return b;
