@@ -62,6 +62,13 @@ TextureField::TextureField(const FieldConfig& config, const FieldDomain& domain,
     for (std::size_t i = m_head_offset; i < offset; ++i) m_parameters[i] = rng.uniform(-bound, bound);
 }
 
+void TextureField::set_parameters(const std::vector<float>& values, const std::string& what) {
+    if (values.size() != m_parameters.size())
+        throw_error("{}: holds {} field parameters, but this field configuration has {}", what, values.size(),
+                    m_parameters.size());
+    m_parameters = values;
+}
+
 const ParameterBlock& TextureField::parameter_block(const std::string& name) const {
     for (const ParameterBlock& b : m_blocks)
         if (b.name == name) return b;
@@ -93,6 +100,26 @@ void build_head_matrix(const float* heads, int features, bool labels, HeadMatrix
         }
         heads = bias + kHeadRows[h];
     }
+}
+
+// Offsets (from the first head parameter) of each output row's weights and bias.
+struct HeadRows {
+    std::size_t weight[TextureField::kOutputs];
+    std::size_t bias[TextureField::kOutputs];
+};
+
+HeadRows head_rows_of(int features) {
+    HeadRows rows{};
+    std::size_t offset = 0;
+    int row = 0;
+    for (int h = 0; h < 3; ++h) {
+        for (int r = 0; r < kHeadRows[h]; ++r, ++row) {
+            rows.weight[row] = offset + std::size_t(r * features);
+            rows.bias[row] = offset + std::size_t(kHeadRows[h] * features + r);
+        }
+        offset += std::size_t(kHeadRows[h] * (features + 1));
+    }
+    return rows;
 }
 
 inline void heads_forward(const HeadMatrix& m, const float* e, int features, float* z) {
@@ -168,6 +195,7 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
     const float* head_params = m_parameters.data() + m_head_offset;
     HeadMatrix heads;
     build_head_matrix(head_params, features, m_config.labels, heads);
+    const HeadRows rows = head_rows_of(features);
 
     // Scratch grows once and is reused by later calls (the hot path allocates nothing).
     if (m_scratch.head_partials.size() < chunks * head_count) m_scratch.head_partials.resize(chunks * head_count);
@@ -189,45 +217,53 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
         const std::size_t block_chunks = chunk_count(block_end - block_begin, kChunk);
 
         parallel_for(block_chunks, 1, [&](std::size_t c0, std::size_t c1) {
-            Vec3f x[HashGrid::kBatch];
-            float e[HashGrid::kBatch * 2 * HashGrid::kMaxLevels];
-            float z[kOutputs], dz[kOutputs];
+            constexpr std::size_t kBatch = HashGrid::kBatch;
+            Vec3f x[kBatch];
+            float e[kBatch * 2 * HashGrid::kMaxLevels];
+            float dz[kBatch][kOutputs];
+            float z[kOutputs];
             for (std::size_t c = c0; c < c1; ++c) {
                 // Head gradient layout = flat parameter layout of the heads.
                 float* partial = partials + (first_chunk + c) * head_count;
                 std::fill(partial, partial + head_count, 0.0f);
                 const std::size_t begin = block_begin + c * kChunk;
                 const std::size_t end = std::min(block_end, begin + kChunk);
-                for (std::size_t b = begin; b < end; b += HashGrid::kBatch) {
-                    const std::size_t count = std::min(HashGrid::kBatch, end - b);
+                for (std::size_t b = begin; b < end; b += kBatch) {
+                    const std::size_t count = std::min(kBatch, end - b);
                     for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
                     m_grid.encode_batch(m_parameters.data(), x, count, e);
                     for (std::size_t i = 0; i < count; ++i) {
-                        const float* ei = e + i * std::size_t(features);
-                        heads_forward(heads, ei, features, z);
-                        activation_backward(z, grads[b + i], m_config.labels, dz);
-                        float de[2 * HashGrid::kMaxLevels] = {};
-                        const float* w = head_params;
-                        float* gw = partial;
-                        for (int h = 0, row = 0; row < head_rows; ++h) {
-                            for (int r = 0; r < kHeadRows[h]; ++r, ++row) {
-                                const float d = dz[row];
-                                const float* wr = w + r * features;
-                                float* gr = gw + r * features;
-                                for (int k = 0; k < features; ++k) {
-                                    gr[k] += d * ei[k];
-                                    de[k] += wr[k] * d;
-                                }
-                                gw[kHeadRows[h] * features + r] += d;
-                            }
-                            w += kHeadRows[h] * (features + 1);
-                            gw += kHeadRows[h] * (features + 1);
+                        heads_forward(heads, e + i * std::size_t(features), features, z);
+                        activation_backward(z, grads[b + i], m_config.labels, dz[i]);
+                    }
+                    // dW += dz^T e and db += sum dz, one output row at a time over the batch.
+                    for (int row = 0; row < head_rows; ++row) {
+                        float* gw = partial + rows.weight[row];
+                        float gb = 0;
+                        for (std::size_t i = 0; i < count; ++i) {
+                            const float d = dz[i][row];
+                            const float* ei = e + i * std::size_t(features);
+                            for (int k = 0; k < features; ++k) gw[k] += d * ei[k];
+                            gb += d;
                         }
-                        const std::size_t local = b + i - block_begin;
-                        for (std::size_t l = 0; l < levels; ++l) {
-                            float* dst = d_features + (l * block_points + local) * 2;
-                            dst[0] = de[2 * l];
-                            dst[1] = de[2 * l + 1];
+                        partial[rows.bias[row]] += gb;
+                    }
+                    // de = W^T dz per point, stored level-major for phase B.
+                    const std::size_t local = b - block_begin;
+                    for (std::size_t i = 0; i < count; ++i) {
+                        float de[2 * HashGrid::kMaxLevels] = {};
+                        for (int row = 0; row < head_rows; ++row) {
+                            const float d = dz[i][row];
+                            const float* w = head_params + rows.weight[row];
+                            for (int k = 0; k < features; ++k) de[k] += w[k] * d;
+                        }
+                        std::copy(de, de + features, e + i * std::size_t(features));  // e is no longer needed
+                    }
+                    for (std::size_t l = 0; l < levels; ++l) {
+                        float* dst = d_features + (l * block_points + local) * 2;
+                        for (std::size_t i = 0; i < count; ++i) {
+                            dst[2 * i] = e[i * std::size_t(features) + 2 * l];
+                            dst[2 * i + 1] = e[i * std::size_t(features) + 2 * l + 1];
                         }
                     }
                 }

@@ -62,6 +62,10 @@ TEST(TextureField, ParameterLayoutMatchesReference) {
     EXPECT_EQ(field.parameter_block("albedo.bias").offset, 953344u + 96u);
     EXPECT_EQ(field.parameter_block("label.bias").offset + 2, field.parameter_count());
     EXPECT_THROW(field.parameter_block("nope"), Error);
+    TextureField copy(config, kDomain, 2);
+    copy.set_parameters(field.parameters(), "test");
+    EXPECT_EQ(copy.parameters(), field.parameters());
+    EXPECT_THROW(copy.set_parameters(std::vector<float>(10), "short.ckpt"), Error);
     // Init ranges: grid U[-1e-4, 1e-4], heads U(-1/sqrt(32), 1/sqrt(32)).
     const auto& p = field.parameters();
     float grid_max = 0, head_max = 0;

@@ -58,6 +58,14 @@ public:
     /// Floats of the grid's parameter block: entry_count() * 2 (953,344 for the defaults).
     std::size_t parameter_count() const { return m_entry_count * kFeaturesPerLevel; }
 
+    /// Largest accepted |grid coordinate|; beyond it coordinates are clamped (the grid wraps
+    /// long before, and the clamp keeps every level's cell index inside the int range).
+    static constexpr float kMaxCoordinate = 1000.0f;
+    /// Clamps a grid coordinate to [-kMaxCoordinate, kMaxCoordinate]; NaN becomes 0.
+    static float sanitize_coordinate(float v) {
+        return v >= -kMaxCoordinate ? (v <= kMaxCoordinate ? v : kMaxCoordinate) : (v < 0 ? -kMaxCoordinate : 0.0f);
+    }
+
     /// The corners and weights of level `level` around grid-space point `x` (tcnn
     /// `pos_fract` + `grid_index`, wrapping uint32 arithmetic included).
     inline void corners(int level, Vec3f x, GridCorners& out) const;
@@ -101,12 +109,11 @@ inline void HashGrid::corners(int level, Vec3f x, GridCorners& out) const {
     for (int d = 0; d < 3; ++d) {
         // tcnn uses fmaf here; a plain multiply-add differs by at most one rounding, which only
         // matters for exact weight transfer (impossible anyway, spec 4.2).
-        const float pos = l.scale * x[d] + 0.5f;
-        // floor via truncation (std::floor is a libm call without SSE4.1). The clamp keeps the
-        // int conversion defined for absurd or NaN inputs (NaN -> -1e9, weights NaN).
-        const float clamped = std::min(1e9f, std::max(-1e9f, pos));
-        int cell = int(clamped);
-        cell -= int(clamped < float(cell));
+        const float pos = l.scale * sanitize_coordinate(x[d]) + 0.5f;
+        // floor via truncation (std::floor is a libm call without SSE4.1); sanitize_coordinate
+        // keeps pos inside the int range.
+        int cell = int(pos);
+        cell -= int(pos < float(cell));
         g[d] = std::uint32_t(cell);
         w1[d] = pos - float(cell);
     }

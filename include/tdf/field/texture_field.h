@@ -86,6 +86,9 @@ public:
     /// The flat parameter vector; the optimizer updates it in place (do not resize).
     std::vector<float>& parameters() { return m_parameters; }
     const std::vector<float>& parameters() const { return m_parameters; }
+    /// Replaces all parameters (resume from a checkpoint); throws tdf::Error naming `what` when
+    /// the count differs from parameter_count() (a checkpoint of another field configuration).
+    void set_parameters(const std::vector<float>& values, const std::string& what);
     /// Named ranges: "grid", then "<head>.weight" (rows x feature_count, row-major, torch
     /// layout) and "<head>.bias" for head in albedo, normal, label.
     const std::vector<ParameterBlock>& parameter_blocks() const { return m_blocks; }

@@ -1,0 +1,69 @@
+#pragma once
+/// Visual guidance without weights: geometry-aware colour refinement. The normal-conditioned
+/// ControlNet of the reference (spec 5.4) pushes the colour render toward an image whose colour
+/// variation agrees with the tactile relief; this backend does the one part of that which needs no
+/// learned prior: it replaces part of the render's fine colour variation with cavity/ridge shading
+/// derived from the curvature of the view-space normal control image (darker cavities, lighter
+/// ridges, as texture artists paint ambient occlusion), so that the albedo learned from the
+/// target acquires variation aligned with the geometry. It cannot invent colours or semantics.
+///
+/// Per image (parallel over rows, deterministic):
+///  1. n = from_bae_control(control), smoothed by a Gaussian of `curvature_sigma` pixels over the
+///     foreground (mask-weighted, so the silhouette does not bleed in).
+///  2. Curvature k = divergence of the (x, y) normal field, d n_x / d x + d n_y / d y with y up
+///     (> 0 on ridges and bumps, < 0 in cavities), central differences, 0 where a neighbour is
+///     background; divided by the `curvature_percentile` quantile of |k| over the curved
+///     foreground pixels (|k| > 1e-3 per pixel) and clamped to [-1, 1] (so the effect does not
+///     depend on resolution or relief height; a flat surface gets no relief).
+///  3. The render c is split into its local mean L (mask-weighted Gaussian, `detail_sigma`
+///     pixels) and detail c - L. The relief detail is R = contrast k (1 - L) on ridges and
+///     contrast k L in cavities, minus its own local mean (so it is pure detail and the local
+///     mean colour is kept).
+///  4. With f = denoise_fraction(strength) (0.5 -> 0.3 over the visual schedule: more noise lets
+///     the prior replace more of the input, spec 5.4): c' = L + (1 - f)(c - L) + f R.
+///     Repeated refinement therefore converges (detail -> R) instead of compounding. Clamped to
+///     [0, 1].
+///  5. Blend by coverage: out = m c' + (1 - m) c; pixels with mask exactly 0 are white (spec 5.4).
+#include <tdf/guidance/guidance_backend.h>
+
+namespace tdf {
+
+class ReliefShadingBackend final : public GuidanceBackend {
+public:
+    static constexpr const char* kName = "relief_shading";
+
+    struct Options {
+        /// "contrast": relief detail at curvature +-1, as a fraction of the way from the local
+        /// mean colour to white (ridges) or black (cavities). [0, 1].
+        float contrast = 0.35f;
+        /// "detail_sigma": scale separating the local mean colour from detail, pixels (> 0).
+        float detail_sigma = 3.0f;
+        /// "curvature_sigma": Gaussian smoothing of the normals before differentiation, pixels.
+        float curvature_sigma = 1.0f;
+        /// "curvature_percentile": quantile of |curvature| (over curved pixels) mapped to 1, (0, 1].
+        float curvature_percentile = 0.9f;
+
+        /// Reads the keys above; throws tdf::Error for unknown keys or bad values.
+        static Options from_json(const Json& config);
+    };
+
+    explicit ReliefShadingBackend(Options options);
+
+    std::string name() const override { return kName; }
+    bool supports(GuidanceKind kind) const override { return kind == GuidanceKind::Visual; }
+    /// Visual requests only (needs the control images).
+    GuidanceResult refine(const GuidanceRequest& request) override;
+
+    const Options& options() const { return m_options; }
+
+private:
+    Options m_options;
+};
+
+/// Step 1-2 above without the normalisation: the divergence of the (x, y) components of
+/// view-space normals (3 channels, x right, y up), per pixel, after mask-weighted Gaussian
+/// smoothing with `sigma` pixels (0 = none). 1 channel; 0 on background pixels (mask < 0.5) and
+/// where a neighbour is background. Units: 1 / pixel.
+Image normal_divergence(const Image& viewspace_normals, const Image& mask, float sigma);
+
+}  // namespace tdf

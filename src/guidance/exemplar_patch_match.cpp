@@ -1,0 +1,580 @@
+#include <tdf/guidance/exemplar_patch_match.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+#include <tdf/core/rng.h>
+#include <tdf/core/vec.h>
+#include <tdf/guidance/image_filters.h>
+#include <tdf/io/image_io.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tdf {
+
+/// One searchable version of an exemplar (a rotation, optionally row-flipped), as a pyramid:
+/// levels[0] is the finest. 3 channels, unit vectors.
+struct ExemplarPatchMatchBackend::Variant {
+    std::vector<Image> levels;
+};
+
+namespace {
+
+using Variant = ExemplarPatchMatchBackend::Variant;
+
+/// A nearest-neighbour field entry: the centre (x, y) of the matched patch in variant v, and the
+/// patch distance.
+struct Match {
+    int v = 0;
+    int x = 0;
+    int y = 0;
+    float d = std::numeric_limits<float>::infinity();
+};
+
+void normalize_vectors(Image& image) {
+    float* p = image.data();
+    for (std::size_t i = 0; i < image.pixel_count(); ++i, p += 3) {
+        const Vec3f n = safe_normalize(Vec3f(p[0], p[1], p[2]));
+        p[0] = n.x, p[1] = n.y, p[2] = n.z;
+    }
+}
+
+/// Rotates a normal map by `angle` counter-clockwise (y up): the picture and the (x, y)
+/// components of its vectors. Multiples of 90 degrees are exact index permutations (sampling
+/// lands on pixel centres); other angles are resampled bilinearly and cropped to the largest
+/// axis-aligned square inside the rotated picture.
+Image rotate_normal_map(const Image& source, float angle) {
+    const float c = std::cos(angle), s = std::sin(angle);
+    const int quarter = int(std::lround(angle / (0.5f * kPi)));
+    const bool exact = std::abs(angle - float(quarter) * 0.5f * kPi) < 1e-6f;
+    int width = source.width(), height = source.height();
+    if (exact && (quarter & 1)) std::swap(width, height);
+    if (!exact)
+        width = height = int(float(std::min(source.width(), source.height())) / (std::abs(c) + std::abs(s)));
+    const float cx_src = 0.5f * float(source.width() - 1), cy_src = 0.5f * float(source.height() - 1);
+    const float cx = 0.5f * float(width - 1), cy = 0.5f * float(height - 1);
+    Image out(width, height, 3);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            // y-up offsets from the centre, rotated back by -angle into the source.
+            const float u = float(x) - cx, v = cy - float(y);
+            float sx = c * u + s * v + cx_src;
+            float sy = cy_src - (-s * u + c * v);
+            if (exact) sx = std::round(sx), sy = std::round(sy);
+            sx = std::clamp(sx, 0.0f, float(source.width() - 1));
+            sy = std::clamp(sy, 0.0f, float(source.height() - 1));
+            const int x0 = int(sx), y0 = int(sy);
+            const int x1 = std::min(x0 + 1, source.width() - 1), y1 = std::min(y0 + 1, source.height() - 1);
+            const float tx = sx - float(x0), ty = sy - float(y0);
+            Vec3f n;
+            for (int ch = 0; ch < 3; ++ch)
+                n[ch] = (source.at(x0, y0, ch) * (1 - tx) + source.at(x1, y0, ch) * tx) * (1 - ty) +
+                        (source.at(x0, y1, ch) * (1 - tx) + source.at(x1, y1, ch) * tx) * ty;
+            n = safe_normalize(Vec3f(c * n.x - s * n.y, s * n.x + c * n.y, n.z));
+            float* dst = out.pixel(x, y);
+            dst[0] = n.x, dst[1] = n.y, dst[2] = n.z;
+        }
+    return out;
+}
+
+/// Rows reversed, vectors unchanged: what the reference's patch renders do (spec 13.13).
+Image flip_rows(const Image& image) {
+    Image out(image.width(), image.height(), image.channels());
+    const std::size_t row = std::size_t(image.width()) * std::size_t(image.channels());
+    for (int y = 0; y < image.height(); ++y)
+        std::copy_n(image.pixel(0, image.height() - 1 - y), row, out.pixel(0, y));
+    return out;
+}
+
+/// Coverage-weighted 2x downsampling: the average of m * n divided by the average of m, so
+/// background zeros do not shrink the normals at the silhouette.
+void downsample_weighted(const Image& normals, const Image& mask, Image& normals_out, Image& mask_out) {
+    Image weighted = normals;
+    for (std::size_t p = 0; p < normals.pixel_count(); ++p)
+        for (int c = 0; c < 3; ++c) weighted.data()[3 * p + std::size_t(c)] *= mask.data()[p];
+    normals_out = downsample_half(weighted);
+    mask_out = downsample_half(mask);
+    for (std::size_t p = 0; p < mask_out.pixel_count(); ++p) {
+        const float m = mask_out.data()[p];
+        float* n = normals_out.data() + 3 * p;
+        for (int c = 0; c < 3; ++c) n[c] = m > 0.0f ? n[c] / m : 0.0f;
+    }
+}
+
+/// The search and voting state of one image at one pyramid level.
+class LevelSolver {
+public:
+    LevelSolver(const Image& target, const Image& mask, const std::vector<Variant>& variants, int level,
+                int patch_size)
+        : m_target(target),
+          m_mask(mask),
+          m_variants(variants),
+          m_level(level),
+          m_radius(patch_size / 2),
+          m_width(target.width()),
+          m_height(target.height()) {
+        // A pixel's patch takes part (kActive) when its window touches the foreground; kFull
+        // marks windows inside the image and fully covered, which take the fast distance path.
+        m_active.assign(std::size_t(m_width) * std::size_t(m_height), kInactive);
+        for (int y = 0; y < m_height; ++y)
+            for (int x = 0; x < m_width; ++x) {
+                if (m_mask.at(x, y, 0) <= 0.0f) continue;
+                for (int dy = -m_radius; dy <= m_radius; ++dy)
+                    for (int dx = -m_radius; dx <= m_radius; ++dx) {
+                        const int qx = x + dx, qy = y + dy;
+                        if (qx >= 0 && qy >= 0 && qx < m_width && qy < m_height)
+                            m_active[index(qx, qy)] = kActive;
+                    }
+            }
+        for (int y = m_radius; y < m_height - m_radius; ++y)
+            for (int x = m_radius; x < m_width - m_radius; ++x) {
+                bool full = true;
+                for (int dy = -m_radius; dy <= m_radius && full; ++dy)
+                    for (int dx = -m_radius; dx <= m_radius && full; ++dx)
+                        full = m_mask.at(x + dx, y + dy, 0) >= 1.0f;
+                if (full) m_active[index(x, y)] = kFull;
+            }
+    }
+
+    std::size_t index(int x, int y) const { return std::size_t(y) * std::size_t(m_width) + std::size_t(x); }
+    bool active(int x, int y) const { return m_active[index(x, y)] != 0; }
+    const Image& exemplar(int v) const { return m_variants[std::size_t(v)].levels[std::size_t(m_level)]; }
+
+    /// Clamps a patch centre into the valid range of variant v.
+    void clamp_centre(Match& m) const {
+        const Image& e = exemplar(m.v);
+        m.x = std::clamp(m.x, m_radius, e.width() - 1 - m_radius);
+        m.y = std::clamp(m.y, m_radius, e.height() - 1 - m_radius);
+    }
+
+    /// Mask-weighted SSD between the target patch at (x, y) and the exemplar patch of `m`;
+    /// stops early once it exceeds `bound`.
+    float distance(int x, int y, const Match& m, float bound) const {
+        const Image& e = exemplar(m.v);
+        if (m_active[index(x, y)] == kFull) return distance_full(x, y, e, m, bound);
+        float sum = 0.0f;
+        for (int dy = -m_radius; dy <= m_radius; ++dy) {
+            const int ty = y + dy;
+            if (ty < 0 || ty >= m_height) continue;
+            for (int dx = -m_radius; dx <= m_radius; ++dx) {
+                const int tx = x + dx;
+                if (tx < 0 || tx >= m_width) continue;
+                const float w = m_mask.at(tx, ty, 0);
+                if (w <= 0.0f) continue;
+                const float* a = m_target.pixel(tx, ty);
+                const float* b = e.pixel(m.x + dx, m.y + dy);
+                const float d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
+                sum += w * (d0 * d0 + d1 * d1 + d2 * d2);
+            }
+            if (sum > bound) return sum;
+        }
+        return sum;
+    }
+
+    /// distance() for a window inside the image with weight 1 everywhere: each window row is one
+    /// contiguous run of 3 * patch floats in both images. Four partial sums let the compiler
+    /// vectorise without reassociating.
+    float distance_full(int x, int y, const Image& e, const Match& m, float bound) const {
+        const int n = 3 * (2 * m_radius + 1);
+        float sum = 0.0f;
+        for (int dy = -m_radius; dy <= m_radius; ++dy) {
+            const float* a = m_target.pixel(x - m_radius, y + dy);
+            const float* b = e.pixel(m.x - m_radius, m.y + dy);
+            float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+            int i = 0;
+            for (; i + 4 <= n; i += 4)
+                for (int k = 0; k < 4; ++k) {
+                    const float d = a[i + k] - b[i + k];
+                    acc[k] += d * d;
+                }
+            for (; i < n; ++i) {
+                const float d = a[i] - b[i];
+                acc[0] += d * d;
+            }
+            sum += (acc[0] + acc[1]) + (acc[2] + acc[3]);
+            if (sum > bound) return sum;
+        }
+        return sum;
+    }
+
+    Match random_match(Rng& rng) const {
+        Match m;
+        m.v = rng.uniform_int(0, int(m_variants.size()));
+        const Image& e = exemplar(m.v);
+        m.x = rng.uniform_int(m_radius, e.width() - m_radius);
+        m.y = rng.uniform_int(m_radius, e.height() - m_radius);
+        return m;
+    }
+
+    void try_candidate(int x, int y, Match candidate, Match& best) const {
+        clamp_centre(candidate);
+        if (candidate.v == best.v && candidate.x == best.x && candidate.y == best.y) return;
+        candidate.d = distance(x, y, candidate, best.d);
+        if (candidate.d < best.d) best = candidate;
+    }
+
+    /// Random initialisation of the field (coarsest level).
+    std::vector<Match> random_field(std::uint64_t seed) const {
+        std::vector<Match> field(m_active.size());
+        parallel_for(std::size_t(m_height), 4, [&](std::size_t y0, std::size_t y1) {
+            for (int y = int(y0); y < int(y1); ++y)
+                for (int x = 0; x < m_width; ++x) {
+                    if (!active(x, y)) continue;
+                    Rng rng = Rng::stream(seed, index(x, y));
+                    Match& m = field[index(x, y)];
+                    m = random_match(rng);
+                    m.d = distance(x, y, m, std::numeric_limits<float>::infinity());
+                }
+        });
+        return field;
+    }
+
+    /// The coarser level's field, upsampled (each coarse match covers 2x2 fine pixels).
+    std::vector<Match> upsampled_field(const std::vector<Match>& coarse, int coarse_width, int coarse_height,
+                                       std::uint64_t seed) const {
+        std::vector<Match> field(m_active.size());
+        parallel_for(std::size_t(m_height), 4, [&](std::size_t y0, std::size_t y1) {
+            for (int y = int(y0); y < int(y1); ++y)
+                for (int x = 0; x < m_width; ++x) {
+                    if (!active(x, y)) continue;
+                    const int cx = std::min(x / 2, coarse_width - 1), cy = std::min(y / 2, coarse_height - 1);
+                    Match m = coarse[std::size_t(cy) * std::size_t(coarse_width) + std::size_t(cx)];
+                    if (!std::isfinite(m.d)) {
+                        // The coarse pixel was inactive: start from a random match.
+                        Rng rng = Rng::stream(seed, index(x, y));
+                        m = random_match(rng);
+                    } else {
+                        m.x = 2 * m.x + (x & 1);
+                        m.y = 2 * m.y + (y & 1);
+                    }
+                    clamp_centre(m);
+                    m.d = distance(x, y, m, std::numeric_limits<float>::infinity());
+                    field[index(x, y)] = m;
+                }
+        });
+        return field;
+    }
+
+    /// Recomputes the distances of `field` against the current target (after a vote changed it).
+    void refresh(std::vector<Match>& field) const {
+        parallel_for(std::size_t(m_height), 4, [&](std::size_t y0, std::size_t y1) {
+            for (int y = int(y0); y < int(y1); ++y)
+                for (int x = 0; x < m_width; ++x) {
+                    Match& m = field[index(x, y)];
+                    if (active(x, y) && std::isfinite(m.d))
+                        m.d = distance(x, y, m, std::numeric_limits<float>::infinity());
+                }
+        });
+    }
+
+    /// One PatchMatch round, Jacobi style: every pixel reads only `field` (the previous round) and
+    /// writes its own entry of the result, so the result does not depend on the thread count.
+    /// Propagation looks `jump` pixels away in the four directions (jump-flood schedule), then
+    /// random search samples around the best match with halving radius, plus one fully random
+    /// candidate that lets a pixel switch variants.
+    std::vector<Match> search_round(const std::vector<Match>& field, int jump, std::uint64_t seed) const {
+        std::vector<Match> next(field.size());
+        parallel_for(std::size_t(m_height), 4, [&](std::size_t y0, std::size_t y1) {
+            static constexpr int kDirections[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+            for (int y = int(y0); y < int(y1); ++y)
+                for (int x = 0; x < m_width; ++x) {
+                    if (!active(x, y)) continue;
+                    Match best = field[index(x, y)];
+                    for (const auto& dir : kDirections) {
+                        const int qx = x + dir[0] * jump, qy = y + dir[1] * jump;
+                        if (qx < 0 || qy < 0 || qx >= m_width || qy >= m_height || !active(qx, qy)) continue;
+                        Match candidate = field[index(qx, qy)];
+                        candidate.x -= dir[0] * jump;
+                        candidate.y -= dir[1] * jump;
+                        try_candidate(x, y, candidate, best);
+                    }
+                    Rng rng = Rng::stream(seed, index(x, y));
+                    const Image& e = exemplar(best.v);
+                    for (int radius = std::max(e.width(), e.height()); radius >= 1; radius /= 2) {
+                        Match candidate = best;
+                        candidate.x += rng.uniform_int(-radius, radius + 1);
+                        candidate.y += rng.uniform_int(-radius, radius + 1);
+                        try_candidate(x, y, candidate, best);
+                    }
+                    try_candidate(x, y, random_match(rng), best);
+                    next[index(x, y)] = best;
+                }
+        });
+        return next;
+    }
+
+    /// Voting: each foreground pixel becomes the unit-length average of what the matches of the
+    /// patches covering it propose for it.
+    Image vote(const std::vector<Match>& field) const {
+        Image out = m_target;
+        parallel_for(std::size_t(m_height), 4, [&](std::size_t y0, std::size_t y1) {
+            for (int y = int(y0); y < int(y1); ++y)
+                for (int x = 0; x < m_width; ++x) {
+                    if (m_mask.at(x, y, 0) <= 0.0f) continue;
+                    Vec3f sum;
+                    for (int dy = -m_radius; dy <= m_radius; ++dy)
+                        for (int dx = -m_radius; dx <= m_radius; ++dx) {
+                            const int qx = x + dx, qy = y + dy;
+                            if (qx < 0 || qy < 0 || qx >= m_width || qy >= m_height) continue;
+                            const Match& m = field[index(qx, qy)];
+                            if (!std::isfinite(m.d)) continue;
+                            const float* e = exemplar(m.v).pixel(m.x - dx, m.y - dy);
+                            sum += Vec3f(e[0], e[1], e[2]);
+                        }
+                    const Vec3f n = safe_normalize(sum);
+                    float* dst = out.pixel(x, y);
+                    dst[0] = n.x, dst[1] = n.y, dst[2] = n.z;
+                }
+        });
+        return out;
+    }
+
+private:
+    const Image& m_target;
+    const Image& m_mask;
+    const std::vector<Variant>& m_variants;
+    int m_level;
+    int m_radius;
+    int m_width;
+    int m_height;
+    static constexpr unsigned char kInactive = 0, kActive = 1, kFull = 2;
+    std::vector<unsigned char> m_active;
+};
+
+/// Mixes the call's seed with the position in the algorithm into one stream seed (splitmix64).
+std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
+    std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (1 + a * 1000003ULL + b);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+}  // namespace
+
+Image read_normal_map(const std::string& path) {
+    Image image = read_image(path);
+    if (image.channels() < 3)
+        throw_error("{}: a normal map needs 3 channels, the file has {}", path, image.channels());
+    if (image.channels() > 3) image = image.channel_range(0, 3);
+    if (lower_extension(path) != ".exr")
+        for (float& v : image.values()) v = v * 2.0f - 1.0f;
+    return image;
+}
+
+ExemplarPatchMatchBackend::Options ExemplarPatchMatchBackend::Options::from_json(const Json& config) {
+    ConfigReader reader(config, "guidance backend 'exemplar_patch_match'");
+    Options o;
+    if (reader.has("exemplars")) {
+        const Json& files = reader.raw("exemplars");
+        if (!files.is_array())
+            throw_error("{}: \"exemplars\" must be an array of file names", reader.where());
+        for (const Json& f : files) {
+            if (!f.is_string())
+                throw_error("{}: \"exemplars\" must be an array of file names", reader.where());
+            o.exemplar_files.push_back(f.get<std::string>());
+        }
+    }
+    o.exemplar_scale = reader.get<float>("exemplar_scale", o.exemplar_scale);
+    o.patch_size = reader.get<int>("patch_size", o.patch_size);
+    o.levels = reader.get<int>("levels", o.levels);
+    o.em_iterations = reader.get<int>("em_iterations", o.em_iterations);
+    o.search_iterations = reader.get<int>("search_iterations", o.search_iterations);
+    o.rotations = reader.get<int>("rotations", o.rotations);
+    o.flip_rows = reader.get<bool>("flip_rows", o.flip_rows);
+    reader.check_all_read();
+    const std::string& where = reader.where();
+    if (!(o.exemplar_scale >= 0.125f && o.exemplar_scale <= 8.0f))
+        throw_error("{}: exemplar_scale {} is outside [0.125, 8]", where, o.exemplar_scale);
+    if (o.patch_size < 3 || o.patch_size > 15 || o.patch_size % 2 == 0)
+        throw_error("{}: patch_size {} must be odd, 3..15", where, o.patch_size);
+    if (o.levels < 1 || o.levels > 6) throw_error("{}: levels {} is outside 1..6", where, o.levels);
+    if (o.em_iterations < 1 || o.em_iterations > 10)
+        throw_error("{}: em_iterations {} is outside 1..10", where, o.em_iterations);
+    if (o.search_iterations < 1 || o.search_iterations > 16)
+        throw_error("{}: search_iterations {} is outside 1..16", where, o.search_iterations);
+    if (o.rotations != 1 && o.rotations != 2 && o.rotations != 4 && o.rotations != 8)
+        throw_error("{}: rotations {} must be 1, 2, 4 or 8", where, o.rotations);
+    return o;
+}
+
+ExemplarPatchMatchBackend::ExemplarPatchMatchBackend(Options options) : m_options(std::move(options)) {
+    if (!m_options.exemplar_files.empty()) {
+        std::vector<Image> exemplars;
+        for (const std::string& file : m_options.exemplar_files) exemplars.push_back(read_normal_map(file));
+        set_exemplars(std::move(exemplars));
+    }
+}
+
+ExemplarPatchMatchBackend::~ExemplarPatchMatchBackend() = default;
+
+void ExemplarPatchMatchBackend::set_exemplars(std::vector<Image> tangent_normals) {
+    if (tangent_normals.empty()) throw_error("guidance backend 'exemplar_patch_match': no exemplars given");
+    std::vector<Variant> variants;
+    for (std::size_t i = 0; i < tangent_normals.size(); ++i) {
+        Image exemplar = std::move(tangent_normals[i]);
+        if (exemplar.channels() < 3)
+            throw_error("guidance backend 'exemplar_patch_match': exemplar {} has {} channels, expected 3",
+                        i,
+                        exemplar.channels());
+        if (exemplar.channels() > 3) exemplar = exemplar.channel_range(0, 3);
+        if (!exemplar.all_finite())
+            throw_error("guidance backend 'exemplar_patch_match': exemplar {} has non-finite values", i);
+        if (m_options.exemplar_scale != 1.0f)
+            exemplar =
+                resize_bilinear(exemplar,
+                                std::max(1, int(std::lround(exemplar.width() * m_options.exemplar_scale))),
+                                std::max(1, int(std::lround(exemplar.height() * m_options.exemplar_scale))));
+        normalize_vectors(exemplar);
+        for (int r = 0; r < m_options.rotations; ++r) {
+            const Image rotated =
+                rotate_normal_map(exemplar, 2.0f * kPi * float(r) / float(m_options.rotations));
+            for (int flip = 0; flip < (m_options.flip_rows ? 2 : 1); ++flip) {
+                Variant variant;
+                variant.levels.push_back(flip ? flip_rows(rotated) : rotated);
+                for (int l = 1; l < m_options.levels; ++l) {
+                    const Image& finer = variant.levels.back();
+                    if (std::min(finer.width(), finer.height()) / 2 < m_options.patch_size) break;
+                    Image coarser = downsample_half(finer);
+                    normalize_vectors(coarser);
+                    variant.levels.push_back(std::move(coarser));
+                }
+                const Image& finest = variant.levels.front();
+                if (std::min(finest.width(), finest.height()) < m_options.patch_size)
+                    throw_error(
+                        "guidance backend 'exemplar_patch_match': exemplar {} is {}x{} after scaling and "
+                        "rotation, smaller than a {}x{} patch",
+                        i,
+                        finest.width(),
+                        finest.height(),
+                        m_options.patch_size,
+                        m_options.patch_size);
+                variants.push_back(std::move(variant));
+            }
+        }
+    }
+    m_variants = std::move(variants);
+    m_exemplar_count = tangent_normals.size();
+}
+
+GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request) {
+    const std::string where = "guidance backend 'exemplar_patch_match'";
+    if (request.kind != GuidanceKind::Tactile)
+        throw_error(
+            "{} handles tactile requests only, got a {} request", where, guidance_kind_name(request.kind));
+    if (m_variants.empty()) throw_error("{}: no exemplars (set \"exemplars\" in its config)", where);
+    validate_request(request, where);
+
+    // Levels usable by every variant and by the image (at least two patches wide).
+    const int patch = m_options.patch_size;
+    std::size_t levels = std::size_t(m_options.levels);
+    for (const Variant& v : m_variants) levels = std::min(levels, v.levels.size());
+    {
+        int size = std::min(request.images[0].width(), request.images[0].height());
+        std::size_t fit = 1;
+        while (fit < levels && size / 2 >= 2 * patch) size /= 2, ++fit;
+        levels = fit;
+    }
+
+    GuidanceResult result;
+    for (std::size_t item = 0; item < request.images.size(); ++item) {
+        std::vector<Image> inputs{request.images[item]};
+        std::vector<Image> masks{request.masks[item]};
+        for (std::size_t l = 1; l < levels; ++l) {
+            Image n, m;
+            downsample_weighted(inputs.back(), masks.back(), n, m);
+            inputs.push_back(std::move(n));
+            masks.push_back(std::move(m));
+        }
+
+        std::vector<Match> field;
+        Image previous_result, previous_input;
+        int previous_width = 0, previous_height = 0;
+        for (std::size_t l = levels; l-- > 0;) {
+            // Starting estimate: the input at this level plus the change made at the coarser level.
+            Image estimate = inputs[l];
+            if (!previous_result.empty()) {
+                const Image up_result = resize_bilinear(previous_result, estimate.width(), estimate.height());
+                const Image up_input = resize_bilinear(previous_input, estimate.width(), estimate.height());
+                for (std::size_t i = 0; i < estimate.values().size(); ++i)
+                    estimate.values()[i] += up_result.values()[i] - up_input.values()[i];
+                for (std::size_t p = 0; p < estimate.pixel_count(); ++p)
+                    if (masks[l].data()[p] > 0.0f) {
+                        float* v = estimate.data() + 3 * p;
+                        const Vec3f n = safe_normalize(Vec3f(v[0], v[1], v[2]));
+                        v[0] = n.x, v[1] = n.y, v[2] = n.z;
+                    }
+            }
+            for (int em = 0; em < m_options.em_iterations; ++em) {
+                LevelSolver solver(estimate, masks[l], m_variants, int(l), patch);
+                const std::uint64_t stage = std::uint64_t(l) * 64 + std::uint64_t(em) * 16;
+                if (field.empty())
+                    field = solver.random_field(mix_seed(request.seed, item, stage));
+                else if (em == 0)
+                    field = solver.upsampled_field(
+                        field, previous_width, previous_height, mix_seed(request.seed, item, stage));
+                else
+                    solver.refresh(field);
+                for (int s = 0; s < m_options.search_iterations; ++s) {
+                    const int jump = 1 << std::max(0, m_options.search_iterations - 1 - s);
+                    field = solver.search_round(
+                        field, jump, mix_seed(request.seed, item, stage + 1 + std::uint64_t(s)));
+                }
+                estimate = solver.vote(field);
+            }
+            previous_result = std::move(estimate);
+            previous_input = inputs[l];
+            previous_width = previous_result.width();
+            previous_height = previous_result.height();
+        }
+
+        // Foreground: coverage-weighted unit normals, as the renders are; background: the input.
+        Image out = request.images[item];
+        const Image& mask = request.masks[item];
+        for (std::size_t p = 0; p < out.pixel_count(); ++p) {
+            const float m = mask.data()[p];
+            if (m <= 0.0f) continue;
+            for (int c = 0; c < 3; ++c)
+                out.data()[3 * p + std::size_t(c)] = m * previous_result.data()[3 * p + std::size_t(c)];
+        }
+        result.refined.push_back(std::move(out));
+    }
+    return result;
+}
+
+double ExemplarPatchMatchBackend::mean_nearest_patch_distance(const Image& normals, const Image& mask) const {
+    TDF_CHECK(!m_variants.empty());
+    TDF_CHECK_EQ(normals.channels(), 3);
+    const int r = m_options.patch_size / 2;
+    const int w = normals.width(), h = normals.height();
+    // Brute force over every variant position; per-row partial sums reduced in row order.
+    std::vector<double> row_sum(std::size_t(h), 0.0);
+    std::vector<std::size_t> row_count(std::size_t(h), 0);
+    LevelSolver solver(normals, mask, m_variants, 0, m_options.patch_size);
+    parallel_for(std::size_t(h), 1, [&](std::size_t y0, std::size_t y1) {
+        for (int y = int(y0); y < int(y1); ++y) {
+            if (y < r || y >= h - r) continue;
+            for (int x = r; x < w - r; ++x) {
+                if (mask.at(x, y, 0) < 0.5f) continue;
+                Match best;
+                for (int v = 0; v < int(m_variants.size()); ++v) {
+                    const Image& e = m_variants[std::size_t(v)].levels[0];
+                    for (int ey = r; ey < e.height() - r; ++ey)
+                        for (int ex = r; ex < e.width() - r; ++ex) {
+                            const Match candidate{v, ex, ey, 0.0f};
+                            const float d = solver.distance(x, y, candidate, best.d);
+                            if (d < best.d) best = candidate, best.d = d;
+                        }
+                }
+                row_sum[std::size_t(y)] += double(best.d) / double((2 * r + 1) * (2 * r + 1));
+                ++row_count[std::size_t(y)];
+            }
+        }
+    });
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (int y = 0; y < h; ++y) sum += row_sum[std::size_t(y)], count += row_count[std::size_t(y)];
+    return count ? sum / double(count) : 0.0;
+}
+
+}  // namespace tdf

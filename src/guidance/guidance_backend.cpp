@@ -1,0 +1,132 @@
+#include <tdf/guidance/guidance_backend.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/vec.h>
+#include <tdf/guidance/exemplar_patch_match.h>
+#include <tdf/guidance/external_backend.h>
+#include <tdf/guidance/relief_shading.h>
+
+namespace tdf {
+
+GuidanceBackend::~GuidanceBackend() = default;
+
+const char* guidance_kind_name(GuidanceKind kind) {
+    return kind == GuidanceKind::Visual ? "visual" : "tactile";
+}
+
+GuidanceKind parse_guidance_kind(const std::string& text, const std::string& where) {
+    if (text == "visual") return GuidanceKind::Visual;
+    if (text == "tactile") return GuidanceKind::Tactile;
+    throw_error("{}: guidance kind '{}' is neither \"visual\" nor \"tactile\"", where, text);
+}
+
+namespace {
+void check_image(const Image& image, int width, int height, int channels, const std::string& where,
+                 const char* role, std::size_t index) {
+    if (image.width() != width || image.height() != height || image.channels() != channels)
+        throw_error("{}: {} {} is {}x{} with {} channels, expected {}x{} with {}",
+                    where,
+                    role,
+                    index,
+                    image.width(),
+                    image.height(),
+                    image.channels(),
+                    width,
+                    height,
+                    channels);
+    if (!image.all_finite()) throw_error("{}: {} {} has non-finite values", where, role, index);
+}
+}  // namespace
+
+void validate_request(const GuidanceRequest& request, const std::string& where) {
+    const std::size_t n = request.images.size();
+    if (n == 0) throw_error("{}: the guidance request has no images", where);
+    const int width = request.images[0].width();
+    const int height = request.images[0].height();
+    if (width <= 0 || height <= 0) throw_error("{}: image 0 is empty", where);
+    for (std::size_t i = 0; i < n; ++i) check_image(request.images[i], width, height, 3, where, "image", i);
+    if (request.masks.size() != n) throw_error("{}: {} masks for {} images", where, request.masks.size(), n);
+    for (std::size_t i = 0; i < n; ++i) check_image(request.masks[i], width, height, 1, where, "mask", i);
+    const std::size_t controls = request.kind == GuidanceKind::Visual ? n : 0;
+    if (request.control.size() != controls)
+        throw_error("{}: {} control images for {} {} images (visual requests need one each, tactile none)",
+                    where,
+                    request.control.size(),
+                    n,
+                    guidance_kind_name(request.kind));
+    for (std::size_t i = 0; i < controls; ++i)
+        check_image(request.control[i], width, height, 3, where, "control image", i);
+    if (!(request.strength >= 0.0 && request.strength <= 1.0))
+        throw_error("{}: guidance strength {} is outside [0, 1]", where, request.strength);
+}
+
+void validate_result(const GuidanceRequest& request, const GuidanceResult& result, const std::string& where) {
+    if (result.refined.size() != request.images.size())
+        throw_error(
+            "{}: {} refined images for {} inputs", where, result.refined.size(), request.images.size());
+    for (std::size_t i = 0; i < result.refined.size(); ++i) {
+        const Image& input = request.images[i];
+        check_image(
+            result.refined[i], input.width(), input.height(), input.channels(), where, "refined image", i);
+    }
+}
+
+namespace {
+/// Applies `convert` to every 3-vector of a 3-channel image.
+template <typename Convert>
+Image map_vectors(const Image& image, Convert convert) {
+    TDF_CHECK_EQ(image.channels(), 3);
+    Image out(image.width(), image.height(), 3);
+    const float* src = image.data();
+    float* dst = out.data();
+    for (std::size_t p = 0; p < image.pixel_count(); ++p, src += 3, dst += 3) {
+        const Vec3f v = convert(Vec3f(src[0], src[1], src[2]));
+        dst[0] = v.x, dst[1] = v.y, dst[2] = v.z;
+    }
+    return out;
+}
+}  // namespace
+
+Image to_bae_control(const Image& viewspace_normals) {
+    return map_vectors(viewspace_normals, [](Vec3f n) {
+        // Matches reference convert_normal2bae: exact-zero background -> (0,0,1), flip red,
+        // F.normalize, (n + 1) / 2 (spec 5.4).
+        if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) n = Vec3f(0.0f, 0.0f, 1.0f);
+        n.x = -n.x;
+        return (normalize_or_zero(n) + Vec3f(1.0f, 1.0f, 1.0f)) * 0.5f;
+    });
+}
+
+Image from_bae_control(const Image& control) {
+    return map_vectors(control, [](Vec3f c) {
+        Vec3f n = c * 2.0f - Vec3f(1.0f, 1.0f, 1.0f);
+        n.x = -n.x;
+        return normalize_or_zero(n);
+    });
+}
+
+std::vector<std::string> GuidanceBackend::names() {
+    return {"none", ExemplarPatchMatchBackend::kName, ReliefShadingBackend::kName, ExternalBackend::kName};
+}
+
+std::unique_ptr<GuidanceBackend> GuidanceBackend::create(const std::string& name, const Json& config) {
+    const Json& object = config.is_null() ? Json::object() : config;
+    if (!object.is_object()) throw_error("guidance backend '{}': the config must be a JSON object", name);
+    if (name == "none") {
+        if (!object.empty())
+            throw_error("guidance backend 'none' takes no config, got key '{}'", object.begin().key());
+        return nullptr;
+    }
+    if (name == ExemplarPatchMatchBackend::kName)
+        return std::make_unique<ExemplarPatchMatchBackend>(
+            ExemplarPatchMatchBackend::Options::from_json(object));
+    if (name == ReliefShadingBackend::kName)
+        return std::make_unique<ReliefShadingBackend>(ReliefShadingBackend::Options::from_json(object));
+    if (name == ExternalBackend::kName)
+        return std::make_unique<ExternalBackend>(ExternalBackend::Options::from_json(object));
+    std::string known;
+    for (const auto& n : names()) known += (known.empty() ? "" : ", ") + n;
+    throw_error("unknown guidance backend '{}' (known: {})", name, known);
+}
+
+}  // namespace tdf
