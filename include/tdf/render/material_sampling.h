@@ -1,0 +1,27 @@
+#pragma once
+/// Per-pixel lookups of a SurfaceMaterial at a traced surface point: what the renderer draws and
+/// what the optimizer uses as its targets (the base albedo and the tactile map, spec 3.1 step 5).
+#include <tdf/mesh/triangle_mesh.h>
+#include <tdf/render/gbuffer.h>
+#include <tdf/render/renderer.h>
+
+namespace tdf {
+
+/// How a tactile map is laid on the surface: uv' = uv * uv_scale. 1 covers the UV atlas once (the
+/// reference, spec 1.3.5); a larger value repeats a tileable map at its physical size.
+struct TactileLayoutTransform {
+    float uv_scale = 1.0f;
+};
+
+/// Albedo of pixel `i` (a hit) from the material's source: texture (trilinear over the whole
+/// pyramid when `mipmapped`, else bilinear), vertex colours (barycentric) or the constant.
+Vec3f sample_albedo(const SurfaceMaterial& material, const TriangleMesh& mesh, const GBuffer& g, std::size_t i,
+                    bool mipmapped);
+
+/// Tangent-space tactile normal of pixel `i` (a hit), trilinear with LOD from the ray
+/// differentials, capped at `max_level` (-1 = whole pyramid); (0,0,1) without a map. Not
+/// renormalised: callers that match the training renderer apply safe_normalize (spec 3.1 step 5).
+Vec3f sample_tactile(const SurfaceMaterial& material, const GBuffer& g, std::size_t i, int max_level = -1,
+                     const TactileLayoutTransform& layout = {});
+
+}  // namespace tdf
