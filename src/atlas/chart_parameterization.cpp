@@ -4,6 +4,7 @@
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_parameterization/ARAP_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/LSCM_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/parameterize.h>
 
@@ -19,8 +20,8 @@ using VertexIndex = SurfaceMesh::Vertex_index;
 namespace SMP = CGAL::Surface_mesh_parameterization;
 }  // namespace
 
-bool parameterize_chart_lscm(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& triangles,
-                             std::vector<Vec2f>& uvs) {
+bool flatten_chart(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& triangles, bool arap,
+                   std::vector<Vec2f>& uvs) {
     try {
         SurfaceMesh mesh;
         std::vector<VertexIndex> vertices;
@@ -34,7 +35,14 @@ bool parameterize_chart_lscm(const std::vector<Vec3f>& positions, const std::vec
         const auto border = CGAL::Polygon_mesh_processing::longest_border(mesh).first;
         if (border == SurfaceMesh::null_halfedge()) return false;  // closed: not a disk
         auto uv_map = mesh.add_property_map<VertexIndex, Kernel::Point_2>("v:uv").first;
-        const SMP::Error_code status = SMP::parameterize(mesh, SMP::LSCM_parameterizer_3<SurfaceMesh>(), border, uv_map);
+        SMP::Error_code status = SMP::OK;
+        if (arap) {
+            using Arap = SMP::ARAP_parameterizer_3<SurfaceMesh>;
+            status = SMP::parameterize(mesh, Arap(Arap::Border_parameterizer(), Arap::Solver_traits(), 1000.0, 30), border,
+                                       uv_map);
+        } else {
+            status = SMP::parameterize(mesh, SMP::LSCM_parameterizer_3<SurfaceMesh>(), border, uv_map);
+        }
         if (status != SMP::OK) return false;
         uvs.resize(positions.size());
         for (std::size_t i = 0; i < vertices.size(); ++i) {
