@@ -84,18 +84,6 @@ PreparedChart prepare(const PackChart& chart) {
 struct Mask {
     int w = 0, h = 0;
     std::vector<std::uint8_t> cells;  // row-major, y * w + x
-    std::vector<int> bottom, top;     // per column: lowest / highest set row, -1 when empty
-
-    void compute_profiles() {
-        bottom.assign(std::size_t(w), -1);
-        top.assign(std::size_t(w), -1);
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x)
-                if (cells[std::size_t(y * w + x)]) {
-                    if (bottom[std::size_t(x)] < 0) bottom[std::size_t(x)] = y;
-                    top[std::size_t(x)] = y;
-                }
-    }
 };
 
 // True when the closed triangle (a, b, c) touches the open cell square [x, x+1] x [y, y+1]
@@ -154,7 +142,6 @@ Mask rasterize_chart(const PreparedChart& chart, double scale, int margin) {
                     for (int d = std::max(0, y - margin); d <= std::min(mask.h - 1, y + margin); ++d)
                         mask.cells[std::size_t(d * mask.w + x)] = 1;
     }
-    mask.compute_profiles();
     return mask;
 }
 
@@ -166,7 +153,6 @@ Mask rotate(const Mask& m) {
     r.cells.assign(m.cells.size(), 0);
     for (int y = 0; y < m.h; ++y)
         for (int x = 0; x < m.w; ++x) r.cells[std::size_t(x * r.w + (m.h - 1 - y))] = m.cells[std::size_t(y * m.w + x)];
-    r.compute_profiles();
     return r;
 }
 
@@ -183,45 +169,105 @@ struct Placement {
     int x = 0, y = 0, turns = 0;
 };
 
-// Drops every chart (in `order`) onto a skyline; false when one does not fit.
+// Runs of set cells per mask row: what a placement test checks.
+struct Span {
+    int row, begin, length;
+};
+std::vector<Span> spans_of(const Mask& m) {
+    std::vector<Span> spans;
+    for (int y = 0; y < m.h; ++y)
+        for (int x = 0; x < m.w;) {
+            if (!m.cells[std::size_t(y * m.w + x)]) {
+                ++x;
+                continue;
+            }
+            const int begin = x;
+            while (x < m.w && m.cells[std::size_t(y * m.w + x)]) ++x;
+            spans.push_back({y, begin, x - begin});
+        }
+    return spans;
+}
+
+// The atlas as free runs: run[y][x] = number of free cells from (x, y) to the right. A span of
+// length L fits at column c of row y iff run[y][c] >= L; when it does not, no position up to
+// c + run[y][c] can hold it either, which lets the scan skip ahead.
+class FreeRuns {
+public:
+    explicit FreeRuns(int size) : m_size(size), m_run(std::size_t(size) * std::size_t(size)), m_used(m_run.size(), 0) {
+        for (int y = 0; y < size; ++y) update_row(y);
+    }
+    int run(int x, int y) const { return m_run[std::size_t(y) * std::size_t(m_size) + std::size_t(x)]; }
+    void occupy(const std::vector<Span>& spans, int x, int y, int h) {
+        for (const Span& s : spans)
+            std::fill_n(m_used.begin() + std::ptrdiff_t(std::size_t(y + s.row) * std::size_t(m_size) + std::size_t(x + s.begin)),
+                        s.length, std::uint8_t(1));
+        for (int r = y; r < y + h; ++r) update_row(r);
+    }
+
+private:
+    void update_row(int y) {
+        const std::size_t base = std::size_t(y) * std::size_t(m_size);
+        int run = 0;
+        for (int x = m_size - 1; x >= 0; --x) {
+            run = m_used[base + std::size_t(x)] ? 0 : run + 1;
+            m_run[base + std::size_t(x)] = run;
+        }
+    }
+    int m_size;
+    std::vector<int> m_run;
+    std::vector<std::uint8_t> m_used;
+};
+
+// Lowest (then leftmost) position where the mask fits, scanning rows bottom-up with free-run
+// skips; false when it fits nowhere. Rows at or above `stop_y` are not scanned.
+bool lowest_fit(const FreeRuns& atlas, const Mask& m, const std::vector<Span>& spans, int size, int stop_y, int& fit_x,
+                int& fit_y) {
+    for (int y = 0; y + m.h <= size && y < stop_y; ++y)
+        for (int x = 0; x + m.w <= size;) {
+            int skip = 0;
+            for (const Span& s : spans) {
+                const int run = atlas.run(x + s.begin, y + s.row);
+                if (run < s.length) {
+                    skip = run + 1;
+                    break;
+                }
+            }
+            if (skip == 0) {
+                fit_x = x;
+                fit_y = y;
+                return true;
+            }
+            x += skip;
+        }
+    return false;
+}
+
+// Places every chart (in `order`) at the lowest position over its four quarter turns, keeping
+// the top of the placed chart lowest; false when one does not fit.
 bool try_pack(const std::vector<PreparedChart>& charts, const std::vector<std::size_t>& order, double scale,
               int size, int margin, std::vector<Placement>& placements) {
-    std::vector<int> sky(std::size_t(size), 0);
+    FreeRuns atlas(size);
     placements.assign(charts.size(), Placement{});
     for (const std::size_t i : order) {
         Mask masks[4];
         masks[0] = rasterize_chart(charts[i], scale, margin);
         for (int r = 1; r < 4; ++r) masks[r] = rotate(masks[r - 1]);
-        long best_height = long(size) + 1, best_waste = 0;
+        std::vector<Span> spans[4];
+        int best_top = size + 1;
         Placement best;
         for (int r = 0; r < 4; ++r) {
             const Mask& m = masks[r];
             if (m.w > size || m.h > size) continue;
-            for (int x = 0; x + m.w <= size; ++x) {
-                int y = 0;
-                bool viable = true;
-                for (int c = 0; c < m.w && viable; ++c)
-                    if (m.bottom[std::size_t(c)] >= 0) {
-                        y = std::max(y, sky[std::size_t(x + c)] - m.bottom[std::size_t(c)]);
-                        viable = long(y) + m.h <= best_height;
-                    }
-                if (!viable) continue;
-                const long height = long(y) + m.h;
-                long waste = 0;
-                for (int c = 0; c < m.w; ++c)
-                    if (m.bottom[std::size_t(c)] >= 0) waste += y + m.bottom[std::size_t(c)] - sky[std::size_t(x + c)];
-                if (height < best_height || (height == best_height && waste < best_waste)) {
-                    best_height = height;
-                    best_waste = waste;
-                    best = {x, y, r};
-                }
+            spans[r] = spans_of(m);
+            int x = 0, y = 0;
+            // Only positions whose top would beat the best so far are worth scanning.
+            if (lowest_fit(atlas, m, spans[r], size, best_top - m.h, x, y) && y + m.h < best_top) {
+                best_top = y + m.h;
+                best = {x, y, r};
             }
         }
-        if (best_height > size) return false;
-        const Mask& m = masks[best.turns];
-        for (int c = 0; c < m.w; ++c)
-            if (m.top[std::size_t(c)] >= 0)
-                sky[std::size_t(best.x + c)] = std::max(sky[std::size_t(best.x + c)], best.y + m.top[std::size_t(c)] + 1);
+        if (best_top > size) return false;
+        atlas.occupy(spans[best.turns], best.x, best.y, masks[best.turns].h);
         placements[i] = best;
     }
     return true;

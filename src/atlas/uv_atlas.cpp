@@ -129,6 +129,37 @@ Surface analyse_surface(const TriangleMesh& mesh) {
     return s;
 }
 
+// Greedy growth leaves saw-toothed borders (faces poking into the next chart), which cost
+// packing space and gutter. A face with two of its three neighbours in another chart moves there
+// when its normal fits that chart's cone. A few sequential passes in face order (deterministic).
+void smooth_chart_borders(const Surface& s, double cos_sharp, double cos_cone, std::vector<int>& chart_of,
+                          std::size_t chart_count) {
+    const std::size_t faces = chart_of.size();
+    for (int pass = 0; pass < 4; ++pass) {
+        std::vector<D3> normal_sum(chart_count);
+        for (std::size_t f = 0; f < faces; ++f)
+            if (chart_of[f] >= 0)
+                normal_sum[std::size_t(chart_of[f])] = normal_sum[std::size_t(chart_of[f])] + s.normal[f] * s.area[f];
+        std::size_t moved = 0;
+        for (std::size_t f = 0; f < faces; ++f) {
+            if (chart_of[f] < 0) continue;
+            int other[3], count = 0;
+            for (int k = 0; k < 3; ++k) {
+                const int g = s.neighbour[f][k];
+                if (g >= 0 && chart_of[std::size_t(g)] != chart_of[f] && dot(s.normal[f], s.normal[std::size_t(g)]) >= cos_sharp)
+                    other[count++] = chart_of[std::size_t(g)];
+            }
+            int target = -1;
+            if (count >= 2 && other[0] == other[1]) target = other[0];
+            if (count == 3 && (other[0] == other[2] || other[1] == other[2])) target = other[2];
+            if (target < 0 || dot(s.normal[f], normalized(normal_sum[std::size_t(target)])) < cos_cone) continue;
+            chart_of[f] = target;
+            ++moved;
+        }
+        if (moved == 0) break;
+    }
+}
+
 // Greedy chart growth: the candidate closest in normal to the chart's mean (then nearest the
 // seed) joins while it stays inside the normal cone; sharp edges are never crossed.
 std::vector<std::vector<int>> grow_charts(const Surface& s, const AtlasOptions& options) {
@@ -166,9 +197,14 @@ std::vector<std::vector<int>> grow_charts(const Surface& s, const AtlasOptions& 
             if (dot(s.normal[std::size_t(g)], normalized(normal_sum)) < cos_cone) continue;
             add(g);
         }
-        std::sort(members.begin(), members.end());
         charts.push_back(std::move(members));
     }
+    smooth_chart_borders(s, cos_sharp, cos_cone, chart_of, charts.size());
+    for (auto& members : charts) members.clear();
+    for (std::size_t f = 0; f < faces; ++f)
+        if (chart_of[f] >= 0) charts[std::size_t(chart_of[f])].push_back(int(f));
+    charts.erase(std::remove_if(charts.begin(), charts.end(), [](const std::vector<int>& c) { return c.empty(); }),
+                 charts.end());
     return charts;
 }
 
