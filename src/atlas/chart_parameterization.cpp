@@ -35,22 +35,31 @@ bool flatten_chart(const std::vector<Vec3f>& positions, const std::vector<Vec3i>
         const auto border = CGAL::Polygon_mesh_processing::longest_border(mesh).first;
         if (border == SurfaceMesh::null_halfedge()) return false;  // closed: not a disk
         auto uv_map = mesh.add_property_map<VertexIndex, Kernel::Point_2>("v:uv").first;
-        SMP::Error_code status = SMP::OK;
+        // Copies the solution out; false when it is not finite.
+        const auto extract = [&]() {
+            uvs.resize(positions.size());
+            for (std::size_t i = 0; i < vertices.size(); ++i) {
+                const Kernel::Point_2 uv = uv_map[vertices[i]];
+                if (!std::isfinite(uv.x()) || !std::isfinite(uv.y())) return false;
+                uvs[i] = Vec2f(float(uv.x()), float(uv.y()));
+            }
+            return true;
+        };
         if (arap) {
+            // ARAP cannot handle some tiny charts (two triangles with every vertex on the border
+            // divide by zero: a CGAL precondition, unchecked in release builds, so look at the
+            // result); LSCM then gives the answer.
             using Arap = SMP::ARAP_parameterizer_3<SurfaceMesh>;
-            status = SMP::parameterize(mesh, Arap(Arap::Border_parameterizer(), Arap::Solver_traits(), 1000.0, 30), border,
-                                       uv_map);
-        } else {
-            status = SMP::parameterize(mesh, SMP::LSCM_parameterizer_3<SurfaceMesh>(), border, uv_map);
+            try {
+                const SMP::Error_code status = SMP::parameterize(
+                    mesh, Arap(Arap::Border_parameterizer(), Arap::Solver_traits(), 1000.0, 30), border, uv_map);
+                if (status == SMP::OK && extract()) return true;
+            } catch (const std::exception&) {
+                // fall through to LSCM
+            }
         }
-        if (status != SMP::OK) return false;
-        uvs.resize(positions.size());
-        for (std::size_t i = 0; i < vertices.size(); ++i) {
-            const Kernel::Point_2 uv = uv_map[vertices[i]];
-            if (!std::isfinite(uv.x()) || !std::isfinite(uv.y())) return false;
-            uvs[i] = Vec2f(float(uv.x()), float(uv.y()));
-        }
-        return true;
+        const SMP::Error_code status = SMP::parameterize(mesh, SMP::LSCM_parameterizer_3<SurfaceMesh>(), border, uv_map);
+        return status == SMP::OK && extract();
     } catch (const std::exception&) {
         // CGAL reports precondition failures (e.g. a border it cannot handle) by throwing.
         return false;
