@@ -1,0 +1,336 @@
+#include <tdf/atlas/chart_packing.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+
+namespace tdf {
+
+namespace {
+
+struct P2 {
+    double x, y;
+};
+
+double cross2(P2 o, P2 a, P2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
+
+// Andrew's monotone chain; returns the hull counter-clockwise (may be 1 or 2 points).
+std::vector<P2> convex_hull(std::vector<P2> points) {
+    std::sort(points.begin(), points.end(), [](P2 a, P2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+    points.erase(std::unique(points.begin(), points.end(), [](P2 a, P2 b) { return a.x == b.x && a.y == b.y; }),
+                 points.end());
+    if (points.size() < 3) return points;
+    std::vector<P2> hull(2 * points.size());
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        while (k >= 2 && cross2(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+        hull[k++] = points[i];
+    }
+    for (std::size_t i = points.size() - 1, t = k + 1; i > 0; --i) {
+        while (k >= t && cross2(hull[k - 2], hull[k - 1], points[i - 1]) <= 0) --k;
+        hull[k++] = points[i - 1];
+    }
+    hull.resize(k - 1);
+    return hull;
+}
+
+// A chart turned to its minimal-area bounding rectangle, with its lower-left corner at 0.
+struct PreparedChart {
+    std::vector<P2> points;
+    std::vector<Vec3i> triangles;
+    double width = 0, height = 0, area = 0;
+};
+
+PreparedChart prepare(const PackChart& chart) {
+    PreparedChart out;
+    out.triangles = chart.triangles;
+    std::vector<P2> points(chart.uvs.size());
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = {chart.uvs[i].x, chart.uvs[i].y};
+    // Rotating calipers, simplified: the best rectangle has a side on a hull edge.
+    const std::vector<P2> hull = convex_hull(points);
+    double best_angle = 0, best_area = 1e300;
+    for (std::size_t i = 0; i < hull.size() && hull.size() >= 3; ++i) {
+        const P2 a = hull[i], b = hull[(i + 1) % hull.size()];
+        const double angle = std::atan2(b.y - a.y, b.x - a.x);
+        const double c = std::cos(-angle), s = std::sin(-angle);
+        double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
+        for (const P2 p : hull) {
+            const double x = c * p.x - s * p.y, y = s * p.x + c * p.y;
+            lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x), lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
+        }
+        const double area = (hi_x - lo_x) * (hi_y - lo_y);
+        if (area < best_area * (1 - 1e-9)) best_area = area, best_angle = angle;
+    }
+    const double c = std::cos(-best_angle), s = std::sin(-best_angle);
+    double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
+    for (P2& p : points) {
+        p = {c * p.x - s * p.y, s * p.x + c * p.y};
+        lo_x = std::min(lo_x, p.x), hi_x = std::max(hi_x, p.x), lo_y = std::min(lo_y, p.y), hi_y = std::max(hi_y, p.y);
+    }
+    for (P2& p : points) p = {p.x - lo_x, p.y - lo_y};
+    out.points = std::move(points);
+    out.width = std::max(hi_x - lo_x, 0.0);
+    out.height = std::max(hi_y - lo_y, 0.0);
+    for (const Vec3i& t : out.triangles)
+        out.area += std::abs(cross2(out.points[std::size_t(t.x)], out.points[std::size_t(t.y)], out.points[std::size_t(t.z)])) * 0.5;
+    return out;
+}
+
+// A chart's footprint in texels: cell (x, y) covers [x, x+1] x [y, y+1]; y grows upward (v).
+struct Mask {
+    int w = 0, h = 0;
+    std::vector<std::uint8_t> cells;  // row-major, y * w + x
+};
+
+// True when the closed triangle (a, b, c) touches the open cell square [x, x+1] x [y, y+1]
+// (separating axes: the cell's axes are covered by the caller's bounding box loop).
+bool triangle_touches_cell(const P2 (&t)[3], int x, int y) {
+    const P2 corners[4] = {{double(x), double(y)}, {x + 1.0, double(y)}, {double(x), y + 1.0}, {x + 1.0, y + 1.0}};
+    for (int k = 0; k < 3; ++k) {
+        const P2 a = t[k], b = t[(k + 1) % 3];
+        const double nx = a.y - b.y, ny = b.x - a.x;  // any normal of edge ab
+        if (nx == 0.0 && ny == 0.0) continue;
+        double tri_lo = 1e300, tri_hi = -1e300, cell_lo = 1e300, cell_hi = -1e300;
+        for (const P2 p : t) {
+            const double d = p.x * nx + p.y * ny;
+            tri_lo = std::min(tri_lo, d), tri_hi = std::max(tri_hi, d);
+        }
+        for (const P2 p : corners) {
+            const double d = p.x * nx + p.y * ny;
+            cell_lo = std::min(cell_lo, d), cell_hi = std::max(cell_hi, d);
+        }
+        if (tri_hi < cell_lo || cell_hi < tri_lo) return false;
+    }
+    return true;
+}
+
+// Rasterizes the chart at `scale` texels per unit, offset by `margin` texels, then dilates by
+// `margin` (square), so that two masks that do not overlap keep 2 * margin texels apart.
+Mask rasterize_chart(const PreparedChart& chart, double scale, int margin) {
+    Mask mask;
+    mask.w = std::max(1, int(std::ceil(chart.width * scale))) + 2 * margin;
+    mask.h = std::max(1, int(std::ceil(chart.height * scale))) + 2 * margin;
+    mask.cells.assign(std::size_t(mask.w) * std::size_t(mask.h), 0);
+    const auto texel = [&](P2 p) { return P2{p.x * scale + margin, p.y * scale + margin}; };
+    for (const Vec3i& tri : chart.triangles) {
+        const P2 t[3] = {texel(chart.points[std::size_t(tri.x)]), texel(chart.points[std::size_t(tri.y)]),
+                         texel(chart.points[std::size_t(tri.z)])};
+        const int x0 = std::clamp(int(std::floor(std::min({t[0].x, t[1].x, t[2].x}))), 0, mask.w - 1);
+        const int x1 = std::clamp(int(std::floor(std::max({t[0].x, t[1].x, t[2].x}))), 0, mask.w - 1);
+        const int y0 = std::clamp(int(std::floor(std::min({t[0].y, t[1].y, t[2].y}))), 0, mask.h - 1);
+        const int y1 = std::clamp(int(std::floor(std::max({t[0].y, t[1].y, t[2].y}))), 0, mask.h - 1);
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x)
+                if (!mask.cells[std::size_t(y * mask.w + x)] && triangle_touches_cell(t, x, y))
+                    mask.cells[std::size_t(y * mask.w + x)] = 1;
+    }
+    if (margin > 0) {  // separable square dilation
+        std::vector<std::uint8_t> tmp(mask.cells.size(), 0);
+        for (int y = 0; y < mask.h; ++y)
+            for (int x = 0; x < mask.w; ++x)
+                if (mask.cells[std::size_t(y * mask.w + x)])
+                    for (int d = std::max(0, x - margin); d <= std::min(mask.w - 1, x + margin); ++d)
+                        tmp[std::size_t(y * mask.w + d)] = 1;
+        std::fill(mask.cells.begin(), mask.cells.end(), 0);
+        for (int y = 0; y < mask.h; ++y)
+            for (int x = 0; x < mask.w; ++x)
+                if (tmp[std::size_t(y * mask.w + x)])
+                    for (int d = std::max(0, y - margin); d <= std::min(mask.h - 1, y + margin); ++d)
+                        mask.cells[std::size_t(d * mask.w + x)] = 1;
+    }
+    return mask;
+}
+
+// 90 degrees counter-clockwise: cell (x, y) -> (h - 1 - y, x); continuous (x, y) -> (h - y, x).
+Mask rotate(const Mask& m) {
+    Mask r;
+    r.w = m.h;
+    r.h = m.w;
+    r.cells.assign(m.cells.size(), 0);
+    for (int y = 0; y < m.h; ++y)
+        for (int x = 0; x < m.w; ++x) r.cells[std::size_t(x * r.w + (m.h - 1 - y))] = m.cells[std::size_t(y * m.w + x)];
+    return r;
+}
+
+// Applies `turns` quarter turns (as `rotate`) to a point of a w x h mask.
+P2 rotate_point(P2 p, int turns, double w, double h) {
+    for (int k = 0; k < turns; ++k) {
+        p = {h - p.y, p.x};
+        std::swap(w, h);
+    }
+    return p;
+}
+
+struct Placement {
+    int x = 0, y = 0, turns = 0;
+};
+
+// Runs of set cells per mask row: what a placement test checks.
+struct Span {
+    int row, begin, length;
+};
+std::vector<Span> spans_of(const Mask& m) {
+    std::vector<Span> spans;
+    for (int y = 0; y < m.h; ++y)
+        for (int x = 0; x < m.w;) {
+            if (!m.cells[std::size_t(y * m.w + x)]) {
+                ++x;
+                continue;
+            }
+            const int begin = x;
+            while (x < m.w && m.cells[std::size_t(y * m.w + x)]) ++x;
+            spans.push_back({y, begin, x - begin});
+        }
+    return spans;
+}
+
+// The atlas as free runs: run[y][x] = number of free cells from (x, y) to the right. A span of
+// length L fits at column c of row y iff run[y][c] >= L; when it does not, no position up to
+// c + run[y][c] can hold it either, which lets the scan skip ahead.
+class FreeRuns {
+public:
+    explicit FreeRuns(int size) : m_size(size), m_run(std::size_t(size) * std::size_t(size)), m_used(m_run.size(), 0) {
+        for (int y = 0; y < size; ++y) update_row(y);
+    }
+    int run(int x, int y) const { return m_run[std::size_t(y) * std::size_t(m_size) + std::size_t(x)]; }
+    void occupy(const std::vector<Span>& spans, int x, int y, int h) {
+        for (const Span& s : spans)
+            std::fill_n(m_used.begin() + std::ptrdiff_t(std::size_t(y + s.row) * std::size_t(m_size) + std::size_t(x + s.begin)),
+                        s.length, std::uint8_t(1));
+        for (int r = y; r < y + h; ++r) update_row(r);
+    }
+
+private:
+    void update_row(int y) {
+        const std::size_t base = std::size_t(y) * std::size_t(m_size);
+        int run = 0;
+        for (int x = m_size - 1; x >= 0; --x) {
+            run = m_used[base + std::size_t(x)] ? 0 : run + 1;
+            m_run[base + std::size_t(x)] = run;
+        }
+    }
+    int m_size;
+    std::vector<int> m_run;
+    std::vector<std::uint8_t> m_used;
+};
+
+// Lowest (then leftmost) position where the mask fits, scanning rows bottom-up with free-run
+// skips; false when it fits nowhere. Rows at or above `stop_y` are not scanned.
+bool lowest_fit(const FreeRuns& atlas, const Mask& m, const std::vector<Span>& spans, int size, int stop_y, int& fit_x,
+                int& fit_y) {
+    for (int y = 0; y + m.h <= size && y < stop_y; ++y)
+        for (int x = 0; x + m.w <= size;) {
+            int skip = 0;
+            for (const Span& s : spans) {
+                const int run = atlas.run(x + s.begin, y + s.row);
+                if (run < s.length) {
+                    skip = run + 1;
+                    break;
+                }
+            }
+            if (skip == 0) {
+                fit_x = x;
+                fit_y = y;
+                return true;
+            }
+            x += skip;
+        }
+    return false;
+}
+
+// Places every chart (in `order`) at the lowest position over its four quarter turns, keeping
+// the top of the placed chart lowest; false when one does not fit.
+bool try_pack(const std::vector<PreparedChart>& charts, const std::vector<std::size_t>& order, double scale,
+              int size, int margin, std::vector<Placement>& placements) {
+    FreeRuns atlas(size);
+    placements.assign(charts.size(), Placement{});
+    for (const std::size_t i : order) {
+        Mask masks[4];
+        masks[0] = rasterize_chart(charts[i], scale, margin);
+        for (int r = 1; r < 4; ++r) masks[r] = rotate(masks[r - 1]);
+        std::vector<Span> spans[4];
+        int best_top = size + 1;
+        Placement best;
+        for (int r = 0; r < 4; ++r) {
+            const Mask& m = masks[r];
+            if (m.w > size || m.h > size) continue;
+            spans[r] = spans_of(m);
+            int x = 0, y = 0;
+            // Only positions whose top would beat the best so far are worth scanning.
+            if (lowest_fit(atlas, m, spans[r], size, best_top - m.h, x, y) && y + m.h < best_top) {
+                best_top = y + m.h;
+                best = {x, y, r};
+            }
+        }
+        if (best_top > size) return false;
+        atlas.occupy(spans[best.turns], best.x, best.y, masks[best.turns].h);
+        placements[i] = best;
+    }
+    return true;
+}
+
+}  // namespace
+
+double pack_charts(std::vector<PackChart>& charts, int size, int gutter) {
+    if (charts.empty()) return 1.0;
+    std::vector<PreparedChart> prepared(charts.size());
+    parallel_for(charts.size(), 16, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) prepared[i] = prepare(charts[i]);
+    });
+    std::vector<std::size_t> order(charts.size());
+    std::iota(order.begin(), order.end(), std::size_t(0));
+    // Largest first (by bounding-rectangle area, then area, then index: deterministic).
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        const double ra = prepared[a].width * prepared[a].height, rb = prepared[b].width * prepared[b].height;
+        return ra > rb;
+    });
+    double total_area = 0;
+    for (const PreparedChart& c : prepared) total_area += c.area;
+    const int margin = (gutter + 1) / 2;
+
+    // Find a scale that fits by shrinking from the 100 % utilisation bound, then bisect.
+    const double upper_bound = double(size) / std::sqrt(std::max(total_area, 1e-300));
+    std::vector<Placement> placements, best_placements;
+    double fail = upper_bound, success = 0;
+    for (double s = upper_bound * 0.9; s > upper_bound * 1e-4; s *= 0.8) {
+        if (try_pack(prepared, order, s, size, margin, placements)) {
+            success = s;
+            best_placements = placements;
+            break;
+        }
+        fail = s;
+    }
+    if (success == 0 && try_pack(prepared, order, 0.0, size, margin, placements)) best_placements = placements;
+    else if (success == 0)
+        throw_error("atlas: {} charts do not fit into {}x{} texels with a {}-texel gutter; use a larger --size or a "
+                    "smaller --gutter", charts.size(), size, size, gutter);
+    for (int iteration = 0; iteration < 8 && success > 0 && fail / success > 1.002; ++iteration) {
+        const double s = std::sqrt(success * fail);
+        if (try_pack(prepared, order, s, size, margin, placements)) {
+            success = s;
+            best_placements = placements;
+        } else {
+            fail = s;
+        }
+    }
+
+    // Write the packed coordinates back: the same transform the masks went through.
+    for (std::size_t i = 0; i < charts.size(); ++i) {
+        const PreparedChart& c = prepared[i];
+        const Placement& p = best_placements[i];
+        const double w = std::max(1, int(std::ceil(c.width * success))) + 2 * margin;
+        const double h = std::max(1, int(std::ceil(c.height * success))) + 2 * margin;
+        for (std::size_t v = 0; v < c.points.size(); ++v) {
+            const P2 local{c.points[v].x * success + margin, c.points[v].y * success + margin};
+            const P2 turned = rotate_point(local, p.turns, w, h);
+            charts[i].uvs[v] = Vec2f(float((turned.x + p.x) / size), float((turned.y + p.y) / size));
+        }
+    }
+    return success;
+}
+
+}  // namespace tdf
