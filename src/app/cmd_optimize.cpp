@@ -1,16 +1,24 @@
-// Placeholder until `tdf optimize` lands.
+// tdf optimize: learn aligned albedo and tactile normal textures for a mesh (README "tdf optimize").
 #include "commands.h"
 
-#include <cstdio>
+#include <tdf/train/optimize_run.h>
 
 namespace tdf::app {
 
 Command register_optimize(CLI::App& root) {
+    auto options = std::make_shared<OptimizeOptions>();
     Command command;
-    command.app = root.add_subcommand("optimize", "(not implemented yet)");
-    command.run = [] {
-        std::fprintf(stderr, "tdf optimize: not implemented yet\n");
-        return 2;
+    CLI::App* app = root.add_subcommand(
+        "optimize", "Learn an albedo map and a tactile normal map for a mesh from a scene file, and export the asset");
+    app->add_option("scene", options->scene_path, "scene file (JSON)")->required()->check(CLI::ExistingFile);
+    app->add_option("overrides", options->overrides, "scene overrides key=value (e.g. optimize.iterations=50 seed=7)");
+    app->add_option("-o,--output", options->output_dir, "output folder")->required();
+    app->add_option("--name", options->name, "file name prefix (default: the scene's folder name)");
+    app->add_flag("--resume", options->resume, "continue an interrupted run from <output>/checkpoint.bin");
+    command.app = app;
+    command.run = [options] {
+        run_optimize(*options);
+        return 0;
     };
     return command;
 }

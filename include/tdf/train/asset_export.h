@@ -1,0 +1,28 @@
+#pragma once
+/// The files a run leaves (spec 1.4, with the fixes users asked for, spec 12.1): the mesh as
+/// OBJ + MTL that references BOTH maps, a glTF binary with baseColorTexture and normalTexture,
+/// the maps as 8-bit PNG (the reference's truncating encoding) and float EXR, and turntable
+/// renders of the result.
+#include <tdf/field/texture_field.h>
+#include <tdf/mesh/triangle_mesh.h>
+#include <tdf/train/run_config.h>
+#include <tdf/train/texture_bake.h>
+
+#include <string>
+#include <vector>
+
+namespace tdf {
+
+/// Bakes `field` and writes `<folder>/<name><postfix>{.obj,.mtl,.glb,_albedo.png,
+/// _tactile_normal.png,_albedo.exr,_tactile_normal.exr}`. Every file is written atomically.
+/// Returns the baked maps for further use (turntables).
+BakedMaps export_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                       const TextureField& field, const TriangleMesh& mesh, const RunConfig& config);
+
+/// Renders `views` azimuths of the exported asset (baked maps, visualizer shading, light from the
+/// camera) and writes `<folder>/turntable/<pass>_<k>.png` for albedo, lambertian,
+/// tactile_normal and shading_normal. Returns the files written.
+std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const BakedMaps& maps,
+                                         int views, int resolution);
+
+}  // namespace tdf

@@ -1,0 +1,76 @@
+#include <tdf/train/asset_export.h>
+
+#include <tdf/core/log.h>
+#include <tdf/io/image_io.h>
+#include <tdf/mesh/mesh_writer.h>
+#include <tdf/render/frame.h>
+#include <tdf/render/renderer.h>
+#include <tdf/render/texture.h>
+#include <tdf/scene/embree_scene.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace tdf {
+
+BakedMaps export_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                       const TextureField& field, const TriangleMesh& mesh, const RunConfig& config) {
+    BakedMaps maps = bake_field(field, mesh, config.texture_size, config.gutter);
+    const std::string stem = name + postfix;
+    const std::string base = folder + "/" + stem;
+    // Matches reference: 8-bit maps by truncation (spec 1.5 step 6, 13.20); EXRs keep floats.
+    write_png(base + "_albedo.png", maps.albedo, 8, Quantize::Truncate);
+    const Image encoded_normals = encode_normal_map(maps.tactile_normal);
+    write_png(base + "_tactile_normal.png", encoded_normals, 8, Quantize::Truncate);
+    if (config.write_exr) {
+        write_exr(base + "_albedo.exr", maps.albedo, ExrPixelType::Float);
+        write_exr(base + "_tactile_normal.exr", maps.tactile_normal, ExrPixelType::Float);
+    }
+    ObjMaterial material;
+    material.name = "defaultMat";
+    material.albedo_map = stem + "_albedo.png";
+    material.normal_map = stem + "_tactile_normal.png";
+    write_obj(base + ".obj", mesh, material);
+    if (config.write_glb) write_glb(base + ".glb", mesh, &maps.albedo, &encoded_normals);
+    log_info("exported {}.obj (+ .mtl{}, maps {}x{})", base, config.write_glb ? ", .glb" : "", config.texture_size,
+             config.texture_size);
+    return maps;
+}
+
+std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const BakedMaps& maps,
+                                         int views, int resolution) {
+    std::vector<std::string> written;
+    if (views <= 0) return written;
+    const EmbreeScene scene(mesh);
+    const MipTexture albedo(maps.albedo), tactile(maps.tactile_normal);
+    SurfaceMaterial material;
+    material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
+    material.albedo = &albedo;
+    material.tactile = &tactile;
+    RenderSettings settings;
+    settings.shading = ShadingMode::Visualizer;
+    const Renderer renderer(mesh, scene, material, settings);
+    // Frame the object whatever its units: the bounding sphere fills the view.
+    const Bounds3 bounds = compute_bounds(mesh);
+    const float fovy = 50.0f;
+    const float radius = 1.1f * 0.5f * length(bounds.extent()) / std::sin(radians(fovy) * 0.5f);
+    const std::vector<Pass> passes = {Pass::Albedo, Pass::Lambertian, Pass::TactileNormal, Pass::ShadingNormal};
+    for (int k = 0; k < views; ++k) {
+        const float azimuth = 360.0f * float(k) / float(views);
+        Camera camera = Camera::orbit(0.0f, azimuth, radius, fovy, resolution, resolution, bounds.center());
+        camera.near_plane = std::min(camera.near_plane, 0.01f * radius);
+        Light light;  // directional from the camera, visualizer ambient (spec 3.9)
+        light.vector = camera.back;
+        light.ambient = 0.1f;
+        const Frame frame = renderer.render(camera, light, passes);
+        for (std::size_t p = 0; p < passes.size(); ++p) {
+            const std::string path = fmt::format("{}/turntable/{}_{:03d}.png", folder, pass_name(passes[p]), k);
+            write_png(path, preview_image(passes[p], frame.images[p], frame.coverage), 8, Quantize::Truncate);
+            written.push_back(path);
+        }
+    }
+    return written;
+}
+
+}  // namespace tdf

@@ -1,0 +1,225 @@
+#include <tdf/train/optimize_run.h>
+
+#include <tdf/atlas/uv_atlas.h>
+#include <tdf/core/atomic_file.h>
+#include <tdf/core/error.h>
+#include <tdf/core/log.h>
+#include <tdf/core/parallel.h>
+#include <tdf/core/progress.h>
+#include <tdf/guidance/exemplar_patch_match.h>
+#include <tdf/guidance/schedule.h>
+#include <tdf/optim/checkpoint.h>
+#include <tdf/render/scene_assets.h>
+#include <tdf/train/asset_export.h>
+#include <tdf/train/trainer.h>
+
+#include <fmt/format.h>
+
+#include <filesystem>
+
+namespace tdf {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Millimetres of surface per unit of UV, averaged over the atlas: sqrt(3-D area / UV area).
+double surface_units_per_uv(const TriangleMesh& mesh) {
+    double area_3d = 0, area_uv = 0;
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+        const Vec3i& t = mesh.triangles[f];
+        const Vec3i& u = mesh.uv_triangles[f];
+        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
+        area_3d += 0.5 * double(length(cross(mesh.positions[std::size_t(t.y)] - p0, mesh.positions[std::size_t(t.z)] - p0)));
+        const Vec2f a = mesh.uvs[std::size_t(u.x)], b = mesh.uvs[std::size_t(u.y)], c = mesh.uvs[std::size_t(u.z)];
+        area_uv += 0.5 * std::fabs(double((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)));
+    }
+    return area_uv > 0 ? std::sqrt(area_3d / area_uv) : 0.0;
+}
+
+// "avocado_00000" -> "avocado": texture names in the reference's description table.
+std::string texture_name_of(const std::string& path) {
+    std::string stem = fs::path(path).stem().string();
+    const auto cut = stem.find("_");
+    return cut == std::string::npos ? stem : stem.substr(0, cut);
+}
+
+std::string make_prompt(const std::string& mesh_path, const std::string& tactile_path) {
+    const std::string mesh_obj = fs::path(mesh_path).parent_path().filename().string();
+    const std::string texture = texture_name_of(tactile_path);
+    try {
+        return textured_prompt(mesh_obj, texture);
+    } catch (const Error&) {
+        // A texture outside the reference's table: its own name describes it.
+        return object_words(mesh_obj) + " with " + texture + " texture" + kPromptSuffix;
+    }
+}
+
+std::unique_ptr<GuidanceBackend> make_backend(const std::string& name, const RunConfig& config,
+                                              const std::vector<std::string>& tactile_images) {
+    Json backend_config = Json::object();
+    if (config.guidance_config.contains(name)) backend_config = config.guidance_config[name];
+    auto backend = GuidanceBackend::create(name, backend_config);
+    if (auto* exemplar = dynamic_cast<ExemplarPatchMatchBackend*>(backend.get());
+        exemplar && exemplar->exemplar_count() == 0) {
+        // The scene's own tactile maps are the touched exemplars unless the config names others.
+        std::vector<Image> exemplars;
+        for (const std::string& path : tactile_images) exemplars.push_back(read_normal_map(path));
+        exemplar->set_exemplars(std::move(exemplars));
+    }
+    return backend;
+}
+
+void check_guidance_keys(const Json& guidance, const std::string& source) {
+    if (!guidance.is_object()) return;
+    const std::vector<std::string> names = GuidanceBackend::names();
+    for (auto it = guidance.begin(); it != guidance.end(); ++it) {
+        const std::string& key = it.key();
+        if (key == "visual" || key == "tactile" || key == "save_frames") continue;
+        if (std::find(names.begin(), names.end(), key) == names.end())
+            throw_error("{}: guidance: unknown key '{}' (expected visual, tactile, save_frames or a backend name)",
+                        source, key);
+    }
+}
+
+const Json& section(const SceneDescription& d, const char* name) {
+    static const Json kNull;
+    const auto it = d.sections.find(name);
+    return it == d.sections.end() ? kNull : it->second;
+}
+
+}  // namespace
+
+void run_optimize(const OptimizeOptions& options) {
+    const SceneDescription description = load_scene(options.scene_path, options.overrides);
+    const RunConfig config = RunConfig::from_json(section(description, "optimize"), section(description, "tactile_layout"),
+                                                  section(description, "export"), section(description, "guidance"),
+                                                  options.scene_path);
+    check_guidance_keys(section(description, "guidance"), options.scene_path);
+    if (description.tactile_images.empty())
+        throw_error("{}: the scene names no tactile texture (tactile.images); `tdf optimize` needs one", options.scene_path);
+    const std::string name =
+        options.name.empty() ? fs::absolute(options.scene_path).parent_path().filename().string() : options.name;
+    ensure_folder(options.output_dir);
+
+    std::unique_ptr<SceneAssets> assets = load_scene_assets(description);
+    if (!assets->mesh.has_uvs()) {
+        if (assets->material.albedo_source == SurfaceMaterial::AlbedoSource::Texture)
+            throw_error("{}: the mesh has an albedo texture but no UVs", description.mesh);
+        log_info("{}: the mesh has no UVs; unwrapping it with the default atlas (run `tdf atlas` to choose the "
+                 "settings)", description.mesh);
+        AtlasOptions atlas_options;
+        atlas_options.size = config.texture_size;
+        AtlasReport report;
+        assets->mesh = build_atlas(assets->mesh, atlas_options, &report);
+        assets->scene = std::make_unique<EmbreeScene>(assets->mesh);
+        log_info("atlas: {} charts, {:.1f} % of texels used, {:.2f} s", report.chart_count, 100 * report.utilisation,
+                 report.seconds);
+    }
+
+    TrainingTarget target;
+    target.mesh = &assets->mesh;
+    target.scene = assets->scene.get();
+    target.material = &assets->material;
+    target.prompt = make_prompt(description.mesh, description.tactile_images.front());
+    if (config.tactile_layout == TactileLayout::Physical) {
+        const float mm_per_pixel = config.tactile_mm_per_pixel;
+        if (!(mm_per_pixel > 0))
+            throw_error("{}: tactile_layout.mode=physical needs the tactile map's millimetres per pixel "
+                        "(tactile_layout.mm_per_pixel)", options.scene_path);
+        const double map_mm = double(assets->tactile.width()) * mm_per_pixel;
+        const double uv_mm = surface_units_per_uv(assets->mesh) * config.mm_per_unit;
+        target.tactile_layout.uv_scale = float(uv_mm / map_mm);
+        log_info("tactile map at physical size: {:.1f} mm wide, repeated {:.2f} times across the atlas", map_mm,
+                 target.tactile_layout.uv_scale);
+    }
+
+    Json resolved = description.to_json();
+    const Json config_json = config.to_json();
+    for (auto it = config_json.begin(); it != config_json.end(); ++it) resolved[it.key()] = *it;
+    const std::string base = options.output_dir + "/" + name;
+    write_text_atomically(base + "_config.json", resolved.dump(2) + "\n");
+    log_info("tdf optimize: scene {}, seed {}, {} iterations ({} matching), resolved configuration in {}_config.json",
+             options.scene_path, description.seed, config.iterations, config.init_iterations, base);
+    log_info("prompt: \"{}\"", target.prompt);
+
+    Trainer trainer(target, config, description.seed);
+    auto visual = make_backend(config.guidance_visual, config, description.tactile_images);
+    auto tactile = make_backend(config.guidance_tactile, config, description.tactile_images);
+    if (!visual || !tactile)
+        log_info("guidance: {}{}; the refinement phase uses the matching terms only for what is disabled",
+                 visual ? "" : "visual off ", tactile ? "" : "tactile off");
+    trainer.set_guidance(std::move(visual), std::move(tactile));
+    if (config.save_guidance_frames) trainer.save_guidance_frames_to(options.output_dir + "/guidance_frames");
+
+    const std::string checkpoint_path = options.output_dir + "/checkpoint.bin";
+    const std::string resolved_text = resolved.dump();
+    LossLog log;
+    if (options.resume) {
+        if (!fs::exists(checkpoint_path))
+            throw_error("--resume: no checkpoint at '{}' (start without --resume)", checkpoint_path);
+        const FieldCheckpoint checkpoint = load_field_checkpoint(checkpoint_path);
+        const Json extra = parse_json(checkpoint.extra, checkpoint_path);
+        if (!extra.contains("config") || extra["config"].get<std::string>() != resolved_text)
+            throw_error("--resume: '{}' was written with a different scene or configuration", checkpoint_path);
+        const int iteration = extra["iteration"].get<int>();
+        trainer.restore(iteration, checkpoint.parameters, checkpoint.adam);
+        log = LossLog::from_json_lines(extra["losses"].get<std::string>(), checkpoint_path);
+        log.truncate(iteration);
+        log_info("resuming at iteration {} from {}", iteration, checkpoint_path);
+    }
+    const auto save_checkpoint = [&] {
+        const Json extra = {{"iteration", trainer.iteration()},
+                            {"seed", description.seed},
+                            {"config", resolved_text},
+                            {"losses", log.to_json_lines()}};
+        save_field_checkpoint(checkpoint_path, trainer.field().parameters(), trainer.optimizer().state(), extra.dump());
+    };
+    const auto write_log = [&] {
+        write_text_atomically(base + "_losses.jsonl", log.to_json_lines());
+        write_text_atomically(base + "_loss_plot.svg", log.to_svg(config.init_iterations));
+    };
+
+    ProgressReporter progress("optimize", std::size_t(config.iterations), 10);
+    progress.advance(std::size_t(trainer.iteration()));
+    while (trainer.iteration() < config.iterations) {
+        LossRecord record;
+        try {
+            record = trainer.step();
+        } catch (const Error& e) {
+            progress.finish();
+            write_log();
+            throw_error("{}; the last good checkpoint is '{}' (continue with --resume)", e.what(), checkpoint_path);
+        }
+        log.add(record);
+        const int done = trainer.iteration();
+        std::string status;
+        for (const auto& [term, value] : record.terms) status += fmt::format(" {}={:.4g}", term, value);
+        progress.advance(1, status);
+        const bool phase_end = done == config.init_iterations || done == config.iterations;
+        if (phase_end || (config.checkpoint_every > 0 && done % config.checkpoint_every == 0)) {
+            save_checkpoint();
+            write_log();
+        }
+        if (done == config.init_iterations && config.init_iterations < config.iterations) {
+            progress.finish();
+            export_asset(options.output_dir, name, "_initialized", trainer.field(), assets->mesh, config);
+        }
+    }
+    progress.finish();
+    write_log();
+
+    const BakedMaps maps = export_asset(options.output_dir, name, "", trainer.field(), assets->mesh, config);
+    const QualityReport quality = trainer.evaluate_held_out();
+    write_turntable(options.output_dir, assets->mesh, maps, config.turntable_views, config.turntable_resolution);
+    const Json report = {{"quality", quality.to_json()},
+                         {"seconds_per_iteration", trainer.stage_times().to_json(trainer.iteration())},
+                         {"seconds_total", progress.elapsed_seconds()},
+                         {"seed", description.seed},
+                         {"threads", ThreadLimit::current()}};
+    write_text_atomically(base + "_report.json", report.dump(2) + "\n");
+    log_info("held-out quality: albedo PSNR {:.2f} dB (foreground), tactile mean cosine {:.4f}; report in {}_report.json",
+             quality.albedo_psnr_foreground, quality.tactile_mean_cosine, base);
+}
+
+}  // namespace tdf
