@@ -59,7 +59,7 @@ TEST(HashGrid, BatchEncodingEqualsPointByPointTrilinearInterpolation) {
     std::vector<Vec3f> x(HashGrid::kBatch);
     for (Vec3f& p : x) p = {rng.uniform(-1.5f, 1.5f), rng.uniform(-1.5f, 1.5f), rng.uniform(-1.5f, 1.5f)};
     std::vector<float> batch(x.size() * 32);
-    grid.encode_batch(params.data(), x.data(), x.size(), batch.data());
+    grid.encode_batch(params.data(), x.data(), x.size(), batch.data(), x.size());  // feature-major
     for (std::size_t i = 0; i < x.size(); ++i)
         for (int level = 0; level < 16; ++level) {
             GridCorners c;
@@ -69,8 +69,8 @@ TEST(HashGrid, BatchEncodingEqualsPointByPointTrilinearInterpolation) {
                 for (int j = 0; j < 2; ++j)
                     f[j] += c.weight[k] * params[(grid.levels()[std::size_t(level)].offset + c.index[k]) * 2 + std::size_t(j)];
             // Same operations in the same order: bit-identical.
-            ASSERT_EQ(batch[i * 32 + std::size_t(2 * level)], f[0]) << "point " << i << " level " << level;
-            ASSERT_EQ(batch[i * 32 + std::size_t(2 * level) + 1], f[1]) << "point " << i << " level " << level;
+            ASSERT_EQ(batch[std::size_t(2 * level) * x.size() + i], f[0]) << "point " << i << " level " << level;
+            ASSERT_EQ(batch[std::size_t(2 * level + 1) * x.size() + i], f[1]) << "point " << i << " level " << level;
         }
 }
 

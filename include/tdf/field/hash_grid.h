@@ -74,12 +74,16 @@ public:
     static constexpr std::size_t kBatch = 64;
 
     /// Writes the feature_count() features of grid-space point `x` to `features`.
-    void encode(const float* grid_params, Vec3f x, float* features) const { encode_batch(grid_params, &x, 1, features); }
+    void encode(const float* grid_params, Vec3f x, float* features) const {
+        encode_batch(grid_params, &x, 1, features, 1);
+    }
 
-    /// Encodes `count` <= kBatch grid-space points `x` into `features` (count rows of
-    /// feature_count() floats). Level by level, with the corner indices of the whole batch
-    /// computed and prefetched before they are read, so cache misses on the fine levels overlap.
-    void encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features) const;
+    /// Encodes `count` <= kBatch grid-space points `x`, feature-major: feature k of point i goes
+    /// to `features[k * stride + i]` (stride >= count), the layout the heads read 8 points per
+    /// instruction. Level by level, with the batch's corner indices computed (vectorized) and
+    /// prefetched before they are read, so cache misses on the hashed levels overlap.
+    void encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features,
+                      std::size_t stride) const;
 
     /// Adds d(features of `level`)/d(grid params)^T * d for `count` <= kBatch points: for point
     /// i, `d_features[2i], d_features[2i+1]` (dL/d features 2l, 2l+1) are spread over its 8
