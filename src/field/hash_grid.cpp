@@ -98,10 +98,12 @@ void batch_corners(const HashGridLevel& l, const BatchPoints& p, std::size_t cou
         const std::uint32_t r = l.resolution, r2 = l.resolution * l.resolution;
         for (int c = 0; c < 8; ++c) {
             const std::uint32_t ox = std::uint32_t(c & 1), oy = std::uint32_t((c >> 1) & 1), oz = std::uint32_t(c >> 2);
-            for (std::size_t i = 0; i < count; ++i) {
-                const std::uint32_t a = (g[0][i] + ox) + (g[1][i] + oy) * r + (g[2][i] + oz) * r2;
-                out.index[c][i] = a < l.table_size ? a : detail::fast_mod(a, l.modulo_magic, l.table_size);
-            }
+            std::uint32_t* index = out.index[c];
+            for (std::size_t i = 0; i < count; ++i) index[i] = (g[0][i] + ox) + (g[1][i] + oy) * r + (g[2][i] + oz) * r2;
+            // The modulo only bites at the +0.5 boundary or for wrapped coordinates: a separate
+            // scalar pass keeps the loop above vectorized.
+            for (std::size_t i = 0; i < count; ++i)
+                if (index[i] >= l.table_size) index[i] = detail::fast_mod(index[i], l.modulo_magic, l.table_size);
         }
     }
     for (int c = 0; c < 8; ++c) {
