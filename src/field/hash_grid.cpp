@@ -1,6 +1,5 @@
-#include <tdf/field/hash_grid.h>
-
 #include <tdf/core/error.h>
+#include <tdf/field/hash_grid.h>
 
 #include <cmath>
 
@@ -29,8 +28,8 @@ HashGrid::HashGrid(const HashGridConfig& config) : m_config(config) {
         // res_1 = 24 (not 25) for the defaults; a test pins the table.
         l.scale = std::exp2(float(level) * log2_scale) * float(config.base_resolution) - 1.0f;
         if (!(l.scale < 2.0e6f))  // keeps scale * kMaxCoordinate inside the int range
-            throw_error("field: level {} scale {} is too fine (reduce levels or per_level_scale)", level,
-                        l.scale);
+            throw_error(
+                "field: level {} scale {} is too fine (reduce levels or per_level_scale)", level, l.scale);
         l.resolution = std::uint32_t(std::ceil(l.scale)) + 1u;
         const std::uint64_t dense = std::uint64_t(l.resolution) * l.resolution * l.resolution;
         const std::uint64_t entries = std::min(dense, max_entries);
@@ -92,18 +91,22 @@ void batch_corners(const HashGridLevel& l, const BatchPoints& p, std::size_t cou
             const std::uint32_t ox = std::uint32_t(c & 1);
             const std::uint32_t oy = (c >> 1) & 1 ? 2654435761u : 0u, oz = c >> 2 ? 805459861u : 0u;
             std::uint32_t* index = out.index[c];
-            for (std::size_t i = 0; i < count; ++i) index[i] = ((g[0][i] + ox) ^ (hy[i] + oy) ^ (hz[i] + oz)) & mask;
+            for (std::size_t i = 0; i < count; ++i)
+                index[i] = ((g[0][i] + ox) ^ (hy[i] + oy) ^ (hz[i] + oz)) & mask;
         }
     } else {
         const std::uint32_t r = l.resolution, r2 = l.resolution * l.resolution;
         for (int c = 0; c < 8; ++c) {
-            const std::uint32_t ox = std::uint32_t(c & 1), oy = std::uint32_t((c >> 1) & 1), oz = std::uint32_t(c >> 2);
+            const std::uint32_t ox = std::uint32_t(c & 1), oy = std::uint32_t((c >> 1) & 1),
+                                oz = std::uint32_t(c >> 2);
             std::uint32_t* index = out.index[c];
-            for (std::size_t i = 0; i < count; ++i) index[i] = (g[0][i] + ox) + (g[1][i] + oy) * r + (g[2][i] + oz) * r2;
+            for (std::size_t i = 0; i < count; ++i)
+                index[i] = (g[0][i] + ox) + (g[1][i] + oy) * r + (g[2][i] + oz) * r2;
             // The modulo only bites at the +0.5 boundary or for wrapped coordinates: a separate
             // scalar pass keeps the loop above vectorized.
             for (std::size_t i = 0; i < count; ++i)
-                if (index[i] >= l.table_size) index[i] = detail::fast_mod(index[i], l.modulo_magic, l.table_size);
+                if (index[i] >= l.table_size)
+                    index[i] = detail::fast_mod(index[i], l.modulo_magic, l.table_size);
         }
     }
     for (int c = 0; c < 8; ++c) {
@@ -125,7 +128,8 @@ void gather_level(const HashGridLevel& l, const float* table, const BatchCorners
     // always share a cache line, so prefetching the even corners covers the lines.
     if (l.hashed)
         for (int c = 0; c < 8; c += 2)
-            for (std::size_t i = 0; i < count; ++i) __builtin_prefetch(table + std::size_t(bc.index[c][i]) * 2);
+            for (std::size_t i = 0; i < count; ++i)
+                __builtin_prefetch(table + std::size_t(bc.index[c][i]) * 2);
     for (std::size_t i = 0; i < count; ++i) {
         float a = 0, b = 0;
         for (int c = 0; c < 8; ++c) {
@@ -150,8 +154,12 @@ void HashGrid::encode_batch(const float* grid_params, const Vec3f* x, std::size_
     for (int level = 0; level < level_count(); ++level) {
         const HashGridLevel& l = m_levels[std::size_t(level)];
         batch_corners(l, p, count, bc);
-        gather_level(l, grid_params + std::size_t(l.offset) * kFeaturesPerLevel, bc, count,
-                     features + std::size_t(2 * level) * stride, features + std::size_t(2 * level + 1) * stride);
+        gather_level(l,
+                     grid_params + std::size_t(l.offset) * kFeaturesPerLevel,
+                     bc,
+                     count,
+                     features + std::size_t(2 * level) * stride,
+                     features + std::size_t(2 * level + 1) * stride);
     }
 }
 

@@ -1,8 +1,7 @@
-#include <tdf/field/texture_field.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
+#include <tdf/field/texture_field.h>
 
 #include <cmath>
 
@@ -66,7 +65,9 @@ TextureField::TextureField(const FieldConfig& config, const FieldDomain& domain,
 
 void TextureField::set_parameters(const std::vector<float>& values, const std::string& what) {
     if (values.size() != m_parameters.size())
-        throw_error("{}: holds {} field parameters, but this field configuration has {}", what, values.size(),
+        throw_error("{}: holds {} field parameters, but this field configuration has {}",
+                    what,
+                    values.size(),
                     m_parameters.size());
     m_parameters = values;
 }
@@ -136,7 +137,8 @@ struct BatchOutputs {
 
 // z = W e + b for a batch, 8 points per AVX2 instruction; each point's sum runs in feature order.
 TDF_MULTIVERSION
-void heads_forward(const HeadMatrix& m, const BatchFeatures& e, int features, std::size_t count, BatchOutputs& z) {
+void heads_forward(const HeadMatrix& m, const BatchFeatures& e, int features, std::size_t count,
+                   BatchOutputs& z) {
     for (int r = 0; r < TextureField::kOutputs; ++r) {
         float* zr = z.value[r];
         for (std::size_t i = 0; i < count; ++i) zr[i] = 0.0f;
@@ -186,11 +188,12 @@ inline void activation_backward(const BatchOutputs& z, std::size_t i, const Fiel
 // are combined in a fixed order, so they vectorize and stay deterministic. Entries i >= count
 // of dz must be 0 up to the next multiple of 8 (and e finite there).
 TDF_MULTIVERSION
-void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const BatchFeatures& e, const BatchOutputs& dz,
-                            int features, std::size_t count, float* partial) {
+void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const BatchFeatures& e,
+                            const BatchOutputs& dz, int features, std::size_t count, float* partial) {
     const std::size_t padded = (count + 7) / 8 * 8;
     auto lane_sum = [](const float* lanes) {
-        return ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3])) + ((lanes[4] + lanes[5]) + (lanes[6] + lanes[7]));
+        return ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3])) +
+               ((lanes[4] + lanes[5]) + (lanes[6] + lanes[7]));
     };
     for (int r = 0; r < m.rows; ++r) {
         const float* d = dz.value[r];
@@ -258,7 +261,8 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
     const HeadRows rows = head_rows_of(features);
 
     // Scratch grows once and is reused by later calls (the hot path allocates nothing).
-    if (m_scratch.head_partials.size() < chunks * head_count) m_scratch.head_partials.resize(chunks * head_count);
+    if (m_scratch.head_partials.size() < chunks * head_count)
+        m_scratch.head_partials.resize(chunks * head_count);
     if (m_scratch.d_features.size() < block_points * std::size_t(features))
         m_scratch.d_features.resize(block_points * std::size_t(features));
     float* d_features = m_scratch.d_features.data();
@@ -293,7 +297,8 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
                     for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
                     m_grid.encode_batch(m_parameters.data(), x, count, e.value[0], kBatch);
                     heads_forward(heads, e, features, count, z);
-                    for (std::size_t i = 0; i < count; ++i) activation_backward(z, i, grads[b + i], m_config.labels, dz);
+                    for (std::size_t i = 0; i < count; ++i)
+                        activation_backward(z, i, grads[b + i], m_config.labels, dz);
                     for (std::size_t i = count; i < kBatch; ++i)
                         for (auto& row : dz.value) row[i] = 0.0f;
                     heads_backward_weights(heads, rows, e, dz, features, count, partial);
@@ -319,8 +324,8 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
                 for (std::size_t b = block_begin; b < block_end; b += kBatch) {
                     const std::size_t count = std::min(kBatch, block_end - b);
                     for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
-                    m_grid.accumulate_level_gradient_batch(int(l), x, count, src + (b - block_begin) * 2,
-                                                           gradient.data());
+                    m_grid.accumulate_level_gradient_batch(
+                        int(l), x, count, src + (b - block_begin) * 2, gradient.data());
                 }
             }
         });
