@@ -84,6 +84,7 @@ TEST(GuidanceFactory, NoneMeansDisabledAndUnknownNamesAreErrors) {
     EXPECT_EQ(relief->name(), "relief_shading");
     EXPECT_TRUE(relief->supports(GuidanceKind::Visual));
     EXPECT_FALSE(relief->supports(GuidanceKind::Tactile));
+    relief->set_exemplars({Image(2, 2, 3, 0.0f)});  // ignored: relief shading uses no exemplars
     EXPECT_THROW(GuidanceBackend::create("relief_shading", Json{{"gian", 0.5}}), Error);  // misspelt key
     EXPECT_THROW(GuidanceBackend::create("external", Json::object()), Error);             // no command
     EXPECT_EQ(GuidanceBackend::names().front(), "none");

@@ -76,7 +76,7 @@ public:
     /// Replaces the exemplars: tangent-space normal maps, 3 channels in [-1, 1] (or 4, alpha
     /// ignored). Builds the search variants and pyramids. Throws tdf::Error for exemplars
     /// smaller than a patch at the coarsest level.
-    void set_exemplars(std::vector<Image> tangent_normals);
+    void set_exemplars(std::vector<Image> tangent_normals) override;
     std::size_t exemplar_count() const { return m_exemplar_count; }
 
     std::string name() const override { return kName; }
