@@ -31,6 +31,10 @@
 /// largest axis-aligned square inside the rotated exemplar), each also with rows flipped when
 /// `flip_rows` is set. Each pixel's match picks its own variant.
 ///
+/// Limitation: the target keeps the input's structure at every scale (step 2), so the backend
+/// sharpens and re-textures relief that is there (as after the reference's 150 iterations of
+/// tactile matching) but does not create bumps on a flat input; a diffusion model with noise can.
+///
 /// The search is approximate (PatchMatch); content that exists in an exemplar variant is found
 /// exactly (tested with 90-degree rotated crops). Cost grows with the image's pixels, not with the
 /// exemplar's size: about 0.4 s CPU for a 256x256 patch and 1.8 s for 512x512 with the defaults
