@@ -4,12 +4,11 @@
 // The points are surface points of a unit sphere seen from 10 orthographic 512x512 views
 // (raster order, background skipped), so the memory access pattern is as coherent as a real
 // render's. Run: build/bench/tdf_field_bench --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
 #include <tdf/field/texture_field.h>
 #include <tdf/optim/adam.h>
-
-#include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <vector>

@@ -1,8 +1,9 @@
+#include <tdf/core/error.h>
 #include <tdf/field/hash_grid.h>
 
-#include <tdf/core/error.h>
-
 #include <cmath>
+
+#include "multiversion_impl.h"
 
 namespace tdf {
 
@@ -27,8 +28,8 @@ HashGrid::HashGrid(const HashGridConfig& config) : m_config(config) {
         // res_1 = 24 (not 25) for the defaults; a test pins the table.
         l.scale = std::exp2(float(level) * log2_scale) * float(config.base_resolution) - 1.0f;
         if (!(l.scale < 2.0e6f))  // keeps scale * kMaxCoordinate inside the int range
-            throw_error("field: level {} scale {} is too fine (reduce levels or per_level_scale)", level,
-                        l.scale);
+            throw_error(
+                "field: level {} scale {} is too fine (reduce levels or per_level_scale)", level, l.scale);
         l.resolution = std::uint32_t(std::ceil(l.scale)) + 1u;
         const std::uint64_t dense = std::uint64_t(l.resolution) * l.resolution * l.resolution;
         const std::uint64_t entries = std::min(dense, max_entries);
@@ -45,15 +46,6 @@ HashGrid::HashGrid(const HashGridConfig& config) : m_config(config) {
 }
 
 namespace {
-
-// Compiled twice (AVX2 and the x86-64 baseline), picked at load time: the SoA loops below
-// vectorize 8 points wide with AVX2. Both versions give bit-identical results: the loops are
-// elementwise, every per-point sum keeps its order, and ISO C++ mode disables FMA contraction.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define TDF_MULTIVERSION __attribute__((target_clones("avx2", "default")))
-#else
-#define TDF_MULTIVERSION
-#endif
 
 constexpr std::size_t kBatch = HashGrid::kBatch;
 
@@ -99,16 +91,22 @@ void batch_corners(const HashGridLevel& l, const BatchPoints& p, std::size_t cou
             const std::uint32_t ox = std::uint32_t(c & 1);
             const std::uint32_t oy = (c >> 1) & 1 ? 2654435761u : 0u, oz = c >> 2 ? 805459861u : 0u;
             std::uint32_t* index = out.index[c];
-            for (std::size_t i = 0; i < count; ++i) index[i] = ((g[0][i] + ox) ^ (hy[i] + oy) ^ (hz[i] + oz)) & mask;
+            for (std::size_t i = 0; i < count; ++i)
+                index[i] = ((g[0][i] + ox) ^ (hy[i] + oy) ^ (hz[i] + oz)) & mask;
         }
     } else {
         const std::uint32_t r = l.resolution, r2 = l.resolution * l.resolution;
         for (int c = 0; c < 8; ++c) {
-            const std::uint32_t ox = std::uint32_t(c & 1), oy = std::uint32_t((c >> 1) & 1), oz = std::uint32_t(c >> 2);
-            for (std::size_t i = 0; i < count; ++i) {
-                const std::uint32_t a = (g[0][i] + ox) + (g[1][i] + oy) * r + (g[2][i] + oz) * r2;
-                out.index[c][i] = a < l.table_size ? a : detail::fast_mod(a, l.modulo_magic, l.table_size);
-            }
+            const std::uint32_t ox = std::uint32_t(c & 1), oy = std::uint32_t((c >> 1) & 1),
+                                oz = std::uint32_t(c >> 2);
+            std::uint32_t* index = out.index[c];
+            for (std::size_t i = 0; i < count; ++i)
+                index[i] = (g[0][i] + ox) + (g[1][i] + oy) * r + (g[2][i] + oz) * r2;
+            // The modulo only bites at the +0.5 boundary or for wrapped coordinates: a separate
+            // scalar pass keeps the loop above vectorized.
+            for (std::size_t i = 0; i < count; ++i)
+                if (index[i] >= l.table_size)
+                    index[i] = detail::fast_mod(index[i], l.modulo_magic, l.table_size);
         }
     }
     for (int c = 0; c < 8; ++c) {
@@ -123,36 +121,45 @@ void batch_corners(const HashGridLevel& l, const BatchPoints& p, std::size_t cou
 }
 
 TDF_MULTIVERSION
-void gather_level(const float* table, const BatchCorners& bc, std::size_t count, std::size_t stride, float* features) {
-    // Corners c and c+1 differ only in x, which the hash multiplies by 1 and the dense layout
-    // strides by 1: they nearly always share a cache line, so the even corners cover the lines.
-    for (int c = 0; c < 8; c += 2)
-        for (std::size_t i = 0; i < count; ++i) __builtin_prefetch(table + std::size_t(bc.index[c][i]) * 2);
+void gather_level(const HashGridLevel& l, const float* table, const BatchCorners& bc, std::size_t count,
+                  float* f0, float* f1) {
+    // Only hashed tables (256 KiB each, 3.5 MiB together) miss the cache; the dense ones stay
+    // in L2. Corners c and c+1 differ only in x, which the hash multiplies by 1: they nearly
+    // always share a cache line, so prefetching the even corners covers the lines.
+    if (l.hashed)
+        for (int c = 0; c < 8; c += 2)
+            for (std::size_t i = 0; i < count; ++i)
+                __builtin_prefetch(table + std::size_t(bc.index[c][i]) * 2);
     for (std::size_t i = 0; i < count; ++i) {
-        float f0 = 0, f1 = 0;
+        float a = 0, b = 0;
         for (int c = 0; c < 8; ++c) {
             const float* entry = table + std::size_t(bc.index[c][i]) * 2;
-            f0 += bc.weight[c][i] * entry[0];
-            f1 += bc.weight[c][i] * entry[1];
+            a += bc.weight[c][i] * entry[0];
+            b += bc.weight[c][i] * entry[1];
         }
-        features[i * stride] = f0;
-        features[i * stride + 1] = f1;
+        f0[i] = a;
+        f1[i] = b;
     }
 }
 
 }  // namespace
 
-void HashGrid::encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features) const {
+void HashGrid::encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features,
+                            std::size_t stride) const {
     TDF_CHECK_LE(count, kBatch);
+    TDF_CHECK_LE(count, stride);
     BatchPoints p;
     BatchCorners bc;
     to_soa(x, count, p);
-    const std::size_t stride = std::size_t(feature_count());
     for (int level = 0; level < level_count(); ++level) {
         const HashGridLevel& l = m_levels[std::size_t(level)];
         batch_corners(l, p, count, bc);
-        gather_level(grid_params + std::size_t(l.offset) * kFeaturesPerLevel, bc, count, stride,
-                     features + 2 * level);
+        gather_level(l,
+                     grid_params + std::size_t(l.offset) * kFeaturesPerLevel,
+                     bc,
+                     count,
+                     features + std::size_t(2 * level) * stride,
+                     features + std::size_t(2 * level + 1) * stride);
     }
 }
 

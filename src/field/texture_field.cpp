@@ -1,10 +1,11 @@
-#include <tdf/field/texture_field.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
+#include <tdf/field/texture_field.h>
 
 #include <cmath>
+
+#include "multiversion_impl.h"
 
 namespace tdf {
 
@@ -64,7 +65,9 @@ TextureField::TextureField(const FieldConfig& config, const FieldDomain& domain,
 
 void TextureField::set_parameters(const std::vector<float>& values, const std::string& what) {
     if (values.size() != m_parameters.size())
-        throw_error("{}: holds {} field parameters, but this field configuration has {}", what, values.size(),
+        throw_error("{}: holds {} field parameters, but this field configuration has {}",
+                    what,
+                    values.size(),
                     m_parameters.size());
     m_parameters = values;
 }
@@ -81,26 +84,17 @@ void TextureField::encode(Vec3f p, float* features) const {
 
 namespace {
 
-// The three heads as one kOutputs x F layer, transposed (feature-major) so that a point's
-// pre-activations are 8 independent, vectorizable sums. Built once per call from the flat
-// parameters, which store each head torch-style as [weight rows x F | bias rows].
-struct HeadMatrix {
-    float weight_t[2 * HashGrid::kMaxLevels][TextureField::kOutputs] = {};
-    float bias[TextureField::kOutputs] = {};
-};
+constexpr std::size_t kBatch = HashGrid::kBatch;
+constexpr int kMaxFeatures = 2 * HashGrid::kMaxLevels;
 
-void build_head_matrix(const float* heads, int features, bool labels, HeadMatrix& m) {
-    int row = 0;
-    for (int h = 0; h < 3; ++h) {
-        const float* bias = heads + kHeadRows[h] * features;
-        for (int r = 0; r < kHeadRows[h]; ++r, ++row) {
-            if (h == 2 && !labels) continue;  // label outputs stay 0
-            for (int k = 0; k < features; ++k) m.weight_t[k][row] = heads[r * features + k];
-            m.bias[row] = bias[r];
-        }
-        heads = bias + kHeadRows[h];
-    }
-}
+// The three heads as one kOutputs x F layer (rows: albedo 3, normal 3, label 2), copied once per
+// call from the flat parameters, which store each head torch-style as [weight rows x F | bias
+// rows]. Label rows stay 0 when labels are off.
+struct HeadMatrix {
+    float weight[TextureField::kOutputs][kMaxFeatures] = {};
+    float bias[TextureField::kOutputs] = {};
+    int rows = 0;  // rows in use: 6, or 8 with labels
+};
 
 // Offsets (from the first head parameter) of each output row's weights and bias.
 struct HeadRows {
@@ -122,30 +116,59 @@ HeadRows head_rows_of(int features) {
     return rows;
 }
 
-inline void heads_forward(const HeadMatrix& m, const float* e, int features, float* z) {
-    float acc[TextureField::kOutputs];
-    for (int r = 0; r < TextureField::kOutputs; ++r) acc[r] = m.bias[r];
-    for (int k = 0; k < features; ++k)
-        for (int r = 0; r < TextureField::kOutputs; ++r) acc[r] += m.weight_t[k][r] * e[k];
-    for (int r = 0; r < TextureField::kOutputs; ++r) z[r] = acc[r];
+void build_head_matrix(const float* heads, int features, bool labels, HeadMatrix& m) {
+    const HeadRows rows = head_rows_of(features);
+    m.rows = labels ? TextureField::kOutputs : TextureField::kOutputs - 2;
+    for (int r = 0; r < m.rows; ++r) {
+        std::copy(heads + rows.weight[r], heads + rows.weight[r] + features, m.weight[r]);
+        m.bias[r] = heads[rows.bias[r]];
+    }
 }
 
-inline void activate(const float* z, FieldOutputs& out) {
-    out.albedo = {sigmoid(z[0]), sigmoid(z[1]), sigmoid(z[2])};
-    const Vec3f u(std::tanh(z[3]), std::tanh(z[4]), std::tanh(z[5]) + 1.0f);
+// Batch of points, feature-major (the layout HashGrid::encode_batch writes with stride kBatch).
+struct BatchFeatures {
+    alignas(32) float value[kMaxFeatures][kBatch];
+};
+
+// Pre-activations or their gradients for a batch, output-major.
+struct BatchOutputs {
+    alignas(32) float value[TextureField::kOutputs][kBatch];
+};
+
+// z = W e + b for a batch, 8 points per AVX2 instruction; each point's sum runs in feature order.
+TDF_MULTIVERSION
+void heads_forward(const HeadMatrix& m, const BatchFeatures& e, int features, std::size_t count,
+                   BatchOutputs& z) {
+    for (int r = 0; r < TextureField::kOutputs; ++r) {
+        float* zr = z.value[r];
+        for (std::size_t i = 0; i < count; ++i) zr[i] = 0.0f;
+        if (r >= m.rows) continue;
+        for (int k = 0; k < features; ++k) {
+            const float w = m.weight[r][k];
+            const float* ek = e.value[k];
+            for (std::size_t i = 0; i < count; ++i) zr[i] += w * ek[i];
+        }
+        for (std::size_t i = 0; i < count; ++i) zr[i] += m.bias[r];
+    }
+}
+
+inline void activate(const BatchOutputs& z, std::size_t i, FieldOutputs& out) {
+    out.albedo = {sigmoid(z.value[0][i]), sigmoid(z.value[1][i]), sigmoid(z.value[2][i])};
+    const Vec3f u(std::tanh(z.value[3][i]), std::tanh(z.value[4][i]), std::tanh(z.value[5][i]) + 1.0f);
     out.normal = normalize_or_zero(u, kNormalEps);
-    out.label[0] = z[6];
-    out.label[1] = z[7];
+    out.label[0] = z.value[6][i];
+    out.label[1] = z.value[7][i];
 }
 
-// dL/dz for one point from dL/d(outputs) (the activations' backward).
-inline void activation_backward(const float* z, const FieldOutputGrads& g, bool labels, float* dz) {
+// dL/dz of point i from dL/d(outputs) (the activations' backward).
+inline void activation_backward(const BatchOutputs& z, std::size_t i, const FieldOutputGrads& g, bool labels,
+                                BatchOutputs& dz) {
     for (int k = 0; k < 3; ++k) {
-        const float a = sigmoid(z[k]);
-        dz[k] = g.d_albedo[k] * a * (1.0f - a);
+        const float a = sigmoid(z.value[k][i]);
+        dz.value[k][i] = g.d_albedo[k] * a * (1.0f - a);
     }
     // n = u / max(|u|, eps) with u = tanh(z) + (0,0,1): dn/du = (I - n n^T) / |u| above eps.
-    const float t[3] = {std::tanh(z[3]), std::tanh(z[4]), std::tanh(z[5])};
+    const float t[3] = {std::tanh(z.value[3][i]), std::tanh(z.value[4][i]), std::tanh(z.value[5][i])};
     const Vec3f u(t[0], t[1], t[2] + 1.0f);
     const float len = length(u);
     Vec3f du;
@@ -155,9 +178,53 @@ inline void activation_backward(const float* z, const FieldOutputGrads& g, bool 
     } else {
         du = g.d_normal / kNormalEps;
     }
-    for (int k = 0; k < 3; ++k) dz[3 + k] = du[k] * (1.0f - t[k] * t[k]);
-    dz[6] = labels ? g.d_label[0] : 0.0f;
-    dz[7] = labels ? g.d_label[1] : 0.0f;
+    for (int k = 0; k < 3; ++k) dz.value[3 + k][i] = du[k] * (1.0f - t[k] * t[k]);
+    dz.value[6][i] = labels ? g.d_label[0] : 0.0f;
+    dz.value[7][i] = labels ? g.d_label[1] : 0.0f;
+}
+
+// Head gradients of a batch added to `partial` (flat head layout): dW[r][k] += sum_i dz[r][i]
+// e[k][i], db[r] += sum_i dz[r][i]. The sums over the batch run in 8 interleaved lanes that
+// are combined in a fixed order, so they vectorize and stay deterministic. Entries i >= count
+// of dz must be 0 up to the next multiple of 8 (and e finite there).
+TDF_MULTIVERSION
+void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const BatchFeatures& e,
+                            const BatchOutputs& dz, int features, std::size_t count, float* partial) {
+    const std::size_t padded = (count + 7) / 8 * 8;
+    auto lane_sum = [](const float* lanes) {
+        return ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3])) +
+               ((lanes[4] + lanes[5]) + (lanes[6] + lanes[7]));
+    };
+    for (int r = 0; r < m.rows; ++r) {
+        const float* d = dz.value[r];
+        float* gw = partial + rows.weight[r];
+        for (int k = 0; k < features; ++k) {
+            const float* ek = e.value[k];
+            float lanes[8] = {};
+            for (std::size_t i = 0; i < padded; i += 8)
+                for (int j = 0; j < 8; ++j) lanes[j] += d[i + std::size_t(j)] * ek[i + std::size_t(j)];
+            gw[k] += lane_sum(lanes);
+        }
+        float lanes[8] = {};
+        for (std::size_t i = 0; i < padded; i += 8)
+            for (int j = 0; j < 8; ++j) lanes[j] += d[i + std::size_t(j)];
+        partial[rows.bias[r]] += lane_sum(lanes);
+    }
+}
+
+// de = W^T dz for a batch, written over `e` (feature-major, no longer needed).
+TDF_MULTIVERSION
+void heads_backward_features(const HeadMatrix& m, const BatchOutputs& dz, int features, std::size_t count,
+                             BatchFeatures& e) {
+    for (int k = 0; k < features; ++k) {
+        float* de = e.value[k];
+        for (std::size_t i = 0; i < count; ++i) de[i] = 0.0f;
+        for (int r = 0; r < m.rows; ++r) {
+            const float w = m.weight[r][k];
+            const float* d = dz.value[r];
+            for (std::size_t i = 0; i < count; ++i) de[i] += w * d[i];
+        }
+    }
 }
 
 }  // namespace
@@ -167,17 +234,15 @@ void TextureField::evaluate(const Vec3f* points, std::size_t n, FieldOutputs* ou
     HeadMatrix heads;
     build_head_matrix(m_parameters.data() + m_head_offset, features, m_config.labels, heads);
     parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
-        Vec3f x[HashGrid::kBatch];
-        float e[HashGrid::kBatch * 2 * HashGrid::kMaxLevels];
-        float z[kOutputs];
-        for (std::size_t b = begin; b < end; b += HashGrid::kBatch) {
-            const std::size_t count = std::min(HashGrid::kBatch, end - b);
+        Vec3f x[kBatch];
+        BatchFeatures e;
+        BatchOutputs z;
+        for (std::size_t b = begin; b < end; b += kBatch) {
+            const std::size_t count = std::min(kBatch, end - b);
             for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
-            m_grid.encode_batch(m_parameters.data(), x, count, e);
-            for (std::size_t i = 0; i < count; ++i) {
-                heads_forward(heads, e + i * std::size_t(features), features, z);
-                activate(z, out[b + i]);
-            }
+            m_grid.encode_batch(m_parameters.data(), x, count, e.value[0], kBatch);
+            heads_forward(heads, e, features, count, z);
+            for (std::size_t i = 0; i < count; ++i) activate(z, i, out[b + i]);
         }
     });
 }
@@ -191,14 +256,13 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
     const std::size_t head_count = m_parameters.size() - m_head_offset;
     const std::size_t chunks = chunk_count(n, kChunk);
     const std::size_t block_points = kBlockChunks * kChunk;
-    const int head_rows = m_config.labels ? kOutputs : kOutputs - 2;
-    const float* head_params = m_parameters.data() + m_head_offset;
     HeadMatrix heads;
-    build_head_matrix(head_params, features, m_config.labels, heads);
+    build_head_matrix(m_parameters.data() + m_head_offset, features, m_config.labels, heads);
     const HeadRows rows = head_rows_of(features);
 
     // Scratch grows once and is reused by later calls (the hot path allocates nothing).
-    if (m_scratch.head_partials.size() < chunks * head_count) m_scratch.head_partials.resize(chunks * head_count);
+    if (m_scratch.head_partials.size() < chunks * head_count)
+        m_scratch.head_partials.resize(chunks * head_count);
     if (m_scratch.d_features.size() < block_points * std::size_t(features))
         m_scratch.d_features.resize(block_points * std::size_t(features));
     float* d_features = m_scratch.d_features.data();
@@ -217,13 +281,13 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
         const std::size_t block_chunks = chunk_count(block_end - block_begin, kChunk);
 
         parallel_for(block_chunks, 1, [&](std::size_t c0, std::size_t c1) {
-            constexpr std::size_t kBatch = HashGrid::kBatch;
             Vec3f x[kBatch];
-            float e[kBatch * 2 * HashGrid::kMaxLevels];
-            float dz[kBatch][kOutputs];
-            float z[kOutputs];
+            BatchFeatures e;
+            BatchOutputs z, dz;
+            // Padding entries of a short batch must be finite zeros for the lane sums.
+            for (auto& row : e.value) std::fill(row, row + kBatch, 0.0f);
+            for (auto& row : dz.value) std::fill(row, row + kBatch, 0.0f);
             for (std::size_t c = c0; c < c1; ++c) {
-                // Head gradient layout = flat parameter layout of the heads.
                 float* partial = partials + (first_chunk + c) * head_count;
                 std::fill(partial, partial + head_count, 0.0f);
                 const std::size_t begin = block_begin + c * kChunk;
@@ -231,39 +295,22 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
                 for (std::size_t b = begin; b < end; b += kBatch) {
                     const std::size_t count = std::min(kBatch, end - b);
                     for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
-                    m_grid.encode_batch(m_parameters.data(), x, count, e);
-                    for (std::size_t i = 0; i < count; ++i) {
-                        heads_forward(heads, e + i * std::size_t(features), features, z);
-                        activation_backward(z, grads[b + i], m_config.labels, dz[i]);
-                    }
-                    // dW += dz^T e and db += sum dz, one output row at a time over the batch.
-                    for (int row = 0; row < head_rows; ++row) {
-                        float* gw = partial + rows.weight[row];
-                        float gb = 0;
-                        for (std::size_t i = 0; i < count; ++i) {
-                            const float d = dz[i][row];
-                            const float* ei = e + i * std::size_t(features);
-                            for (int k = 0; k < features; ++k) gw[k] += d * ei[k];
-                            gb += d;
-                        }
-                        partial[rows.bias[row]] += gb;
-                    }
-                    // de = W^T dz per point, stored level-major for phase B.
+                    m_grid.encode_batch(m_parameters.data(), x, count, e.value[0], kBatch);
+                    heads_forward(heads, e, features, count, z);
+                    for (std::size_t i = 0; i < count; ++i)
+                        activation_backward(z, i, grads[b + i], m_config.labels, dz);
+                    for (std::size_t i = count; i < kBatch; ++i)
+                        for (auto& row : dz.value) row[i] = 0.0f;
+                    heads_backward_weights(heads, rows, e, dz, features, count, partial);
+                    heads_backward_features(heads, dz, features, count, e);
                     const std::size_t local = b - block_begin;
-                    for (std::size_t i = 0; i < count; ++i) {
-                        float de[2 * HashGrid::kMaxLevels] = {};
-                        for (int row = 0; row < head_rows; ++row) {
-                            const float d = dz[i][row];
-                            const float* w = head_params + rows.weight[row];
-                            for (int k = 0; k < features; ++k) de[k] += w[k] * d;
-                        }
-                        std::copy(de, de + features, e + i * std::size_t(features));  // e is no longer needed
-                    }
                     for (std::size_t l = 0; l < levels; ++l) {
                         float* dst = d_features + (l * block_points + local) * 2;
+                        const float* d0 = e.value[2 * l];
+                        const float* d1 = e.value[2 * l + 1];
                         for (std::size_t i = 0; i < count; ++i) {
-                            dst[2 * i] = e[i * std::size_t(features) + 2 * l];
-                            dst[2 * i + 1] = e[i * std::size_t(features) + 2 * l + 1];
+                            dst[2 * i] = d0[i];
+                            dst[2 * i + 1] = d1[i];
                         }
                     }
                 }
@@ -271,14 +318,14 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
         });
 
         parallel_for(levels, 1, [&](std::size_t l0, std::size_t l1) {
-            Vec3f x[HashGrid::kBatch];
+            Vec3f x[kBatch];
             for (std::size_t l = l0; l < l1; ++l) {
                 const float* src = d_features + l * block_points * 2;
-                for (std::size_t b = block_begin; b < block_end; b += HashGrid::kBatch) {
-                    const std::size_t count = std::min(HashGrid::kBatch, block_end - b);
+                for (std::size_t b = block_begin; b < block_end; b += kBatch) {
+                    const std::size_t count = std::min(kBatch, block_end - b);
                     for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
-                    m_grid.accumulate_level_gradient_batch(int(l), x, count, src + (b - block_begin) * 2,
-                                                           gradient.data());
+                    m_grid.accumulate_level_gradient_batch(
+                        int(l), x, count, src + (b - block_begin) * 2, gradient.data());
                 }
             }
         });

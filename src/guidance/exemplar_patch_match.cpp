@@ -507,7 +507,8 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
             }
             for (int em = 0; em < m_options.em_iterations; ++em) {
                 LevelSolver solver(estimate, masks[l], m_variants, int(l), patch);
-                const std::uint64_t stage = std::uint64_t(l) * 64 + std::uint64_t(em) * 16;
+                // Distinct streams per (level, EM round, search round): search_iterations <= 16 < 32.
+                const std::uint64_t stage = std::uint64_t(l) * 1024 + std::uint64_t(em) * 32;
                 if (field.empty())
                     field = solver.random_field(mix_seed(request.seed, item, stage));
                 else if (em == 0)

@@ -99,10 +99,16 @@ ExternalBackend::Options ExternalBackend::Options::from_json(const Json& config)
 
 ExternalBackend::ExternalBackend(Options options) : m_options(std::move(options)) {
     TDF_CHECK(!m_options.command.empty());
-    m_work_folder = m_options.work_folder.empty()
+    m_temporary_work_folder = m_options.work_folder.empty();
+    m_work_folder = m_temporary_work_folder
                         ? (fs::temp_directory_path() / fmt::format("tdf-guidance-{}", getpid())).string()
                         : m_options.work_folder;
     m_work_folder = fs::absolute(m_work_folder).lexically_normal().string();
+}
+
+ExternalBackend::~ExternalBackend() {
+    std::error_code ignored;
+    if (m_temporary_work_folder && fs::is_empty(m_work_folder, ignored)) fs::remove(m_work_folder, ignored);
 }
 
 bool ExternalBackend::supports(GuidanceKind kind) const {

@@ -1,6 +1,5 @@
-#include <tdf/loss/image_loss.h>
-
 #include <tdf/core/error.h>
+#include <tdf/loss/image_loss.h>
 
 #include <cmath>
 #include <vector>
@@ -64,7 +63,8 @@ double mean_colour_mse_loss(const float* pred, const float* target, const ImageB
             const float* t = target + img * pixels * channels;
             for (std::size_t c = 0; c < channels; ++c) {
                 double s = 0;
-                for (std::size_t k = 0; k < pixels; ++k) s += double(p[k * channels + c]) - double(t[k * channels + c]);
+                for (std::size_t k = 0; k < pixels; ++k)
+                    s += double(p[k * channels + c]) - double(t[k * channels + c]);
                 diff[img * channels + c] = s / double(pixels);
             }
         }
@@ -197,7 +197,8 @@ private:
 
 }  // namespace
 
-double ssim_loss(const float* pred, const float* target, const ImageBatchShape& shape, float* grad, float weight) {
+double ssim_loss(const float* pred, const float* target, const ImageBatchShape& shape, float* grad,
+                 float weight) {
     const std::size_t n = shape.values();
     if (n == 0) return 0.0;
     GaussianBlur blur(shape);

@@ -1,7 +1,6 @@
-#include <tdf/loss/tactile_loss.h>
-
 #include <tdf/core/error.h>
 #include <tdf/loss/image_loss.h>
+#include <tdf/loss/tactile_loss.h>
 
 namespace tdf {
 
@@ -22,8 +21,11 @@ double tactile_matching_loss(const Vec3f* pred, const Vec3f* target, std::size_t
 double tactile_guidance_loss(TactileGuidanceMetric metric, const Vec3f* pred, const Vec3f* refined,
                              std::size_t count, Vec3f* grad, float weight) {
     if (metric == TactileGuidanceMetric::Cosine) return cosine_loss(pred, refined, count, grad, weight);
-    return mse_loss(reinterpret_cast<const float*>(pred), reinterpret_cast<const float*>(refined), 3 * count,
-                    reinterpret_cast<float*>(grad), weight);
+    return mse_loss(reinterpret_cast<const float*>(pred),
+                    reinterpret_cast<const float*>(refined),
+                    3 * count,
+                    reinterpret_cast<float*>(grad),
+                    weight);
 }
 
 }  // namespace tdf

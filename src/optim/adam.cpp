@@ -1,7 +1,6 @@
-#include <tdf/optim/adam.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/optim/adam.h>
 
 #include <cmath>
 #include <cstring>
@@ -47,15 +46,19 @@ AdamState AdamState::from_bytes(const std::string& bytes, const std::string& wha
         throw_error("{}: not an Adam state (bad magic)", what);
     std::size_t pos = sizeof(kMagic);
     const auto version = take<std::uint32_t>(bytes, pos, what);
-    if (version != kVersion) throw_error("{}: Adam state version {} is not supported (expected {})", what, version, kVersion);
+    if (version != kVersion)
+        throw_error("{}: Adam state version {} is not supported (expected {})", what, version, kVersion);
     const auto count = take<std::uint64_t>(bytes, pos, what);
     AdamState state;
     state.step = take<std::int64_t>(bytes, pos, what);
     if (state.step < 0) throw_error("{}: Adam state has a negative step count {}", what, state.step);
     const std::size_t remaining = bytes.size() - pos;
     if (count > remaining / (2 * sizeof(float)) || remaining != count * 2 * sizeof(float))
-        throw_error("{}: Adam state holds {} bytes of moments, expected {} for {} parameters", what, remaining,
-                    count * 2 * sizeof(float), count);
+        throw_error("{}: Adam state holds {} bytes of moments, expected {} for {} parameters",
+                    what,
+                    remaining,
+                    count * 2 * sizeof(float),
+                    count);
     state.m.resize(count);
     state.v.resize(count);
     std::memcpy(state.m.data(), bytes.data() + pos, count * sizeof(float));
@@ -77,7 +80,8 @@ Adam::Adam(std::size_t parameter_count, const AdamHyperparams& hyper) : m_hyper(
 
 void Adam::restore(AdamState state) {
     if (state.m.size() != m_state.m.size() || state.v.size() != m_state.v.size())
-        throw_error("Adam state for {} parameters cannot be restored into an optimizer for {}", state.m.size(),
+        throw_error("Adam state for {} parameters cannot be restored into an optimizer for {}",
+                    state.m.size(),
                     m_state.m.size());
     m_state = std::move(state);
 }

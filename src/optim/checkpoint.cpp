@@ -1,7 +1,6 @@
-#include <tdf/optim/checkpoint.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
+#include <tdf/optim/checkpoint.h>
 
 #include <cerrno>
 #include <cstdint>
@@ -39,8 +38,8 @@ T read_at(const std::string& in, std::size_t pos) {
 
 }  // namespace
 
-void save_field_checkpoint(const std::string& path, const std::vector<float>& parameters, const AdamState& adam,
-                           const std::string& extra) {
+void save_field_checkpoint(const std::string& path, const std::vector<float>& parameters,
+                           const AdamState& adam, const std::string& extra) {
     const std::string adam_bytes = adam.to_bytes();
     std::string out;
     out.reserve(kHeaderSize + parameters.size() * sizeof(float) + adam_bytes.size() + extra.size() + 8);
@@ -69,7 +68,8 @@ FieldCheckpoint load_field_checkpoint(const std::string& path) {
         throw_error("{}: not a tdf field checkpoint", path);
     if (in.size() < kHeaderSize + 8) throw_error("{}: checkpoint is truncated ({} bytes)", path, in.size());
     const auto version = read_at<std::uint32_t>(in, 8);
-    if (version != kVersion) throw_error("{}: checkpoint version {} is not supported (expected {})", path, version, kVersion);
+    if (version != kVersion)
+        throw_error("{}: checkpoint version {} is not supported (expected {})", path, version, kVersion);
     const auto parameter_count = read_at<std::uint64_t>(in, 16);
     const auto adam_size = read_at<std::uint64_t>(in, 24);
     const auto extra_size = read_at<std::uint64_t>(in, 32);
@@ -77,7 +77,8 @@ FieldCheckpoint load_field_checkpoint(const std::string& path) {
     // Checked piecewise so that absurd sizes cannot overflow the sum.
     if (parameter_count > body / sizeof(float) || adam_size > body || extra_size > body ||
         parameter_count * sizeof(float) + adam_size + extra_size != body)
-        throw_error("{}: checkpoint is truncated or corrupt (sizes do not add up to {} bytes)", path, in.size());
+        throw_error(
+            "{}: checkpoint is truncated or corrupt (sizes do not add up to {} bytes)", path, in.size());
     const std::size_t checksum_at = in.size() - 8;
     if (read_at<std::uint64_t>(in, checksum_at) != fnv1a(in.data(), checksum_at))
         throw_error("{}: checkpoint is corrupt (checksum mismatch)", path);
@@ -91,7 +92,9 @@ FieldCheckpoint load_field_checkpoint(const std::string& path) {
     pos += adam_size;
     checkpoint.extra = in.substr(pos, extra_size);
     if (checkpoint.adam.m.size() != parameter_count)
-        throw_error("{}: checkpoint's Adam state has {} moments for {} parameters", path, checkpoint.adam.m.size(),
+        throw_error("{}: checkpoint's Adam state has {} moments for {} parameters",
+                    path,
+                    checkpoint.adam.m.size(),
                     parameter_count);
     return checkpoint;
 }

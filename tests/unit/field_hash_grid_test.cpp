@@ -1,8 +1,7 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/core/rng.h>
 #include <tdf/field/hash_grid.h>
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
@@ -12,9 +11,11 @@ using namespace tdf;
 TEST(HashGrid, LevelResolutionsMatchReference) {
     const HashGrid grid(HashGridConfig{});
     // Spec 4.2: res_l = ceil(scale_l) + 1 with float32 scale_l = 2^(l log2 1.5) * 16 - 1.
-    const std::uint32_t expected[16] = {16, 24, 36, 54, 81, 122, 183, 274, 411, 616, 923, 1384, 2076, 3114, 4671, 7007};
+    const std::uint32_t expected[16] = {
+        16, 24, 36, 54, 81, 122, 183, 274, 411, 616, 923, 1384, 2076, 3114, 4671, 7007};
     ASSERT_EQ(grid.level_count(), 16);
-    for (int l = 0; l < 16; ++l) EXPECT_EQ(grid.levels()[std::size_t(l)].resolution, expected[l]) << "level " << l;
+    for (int l = 0; l < 16; ++l)
+        EXPECT_EQ(grid.levels()[std::size_t(l)].resolution, expected[l]) << "level " << l;
     EXPECT_EQ(grid.levels()[0].table_size, 4096u);
     EXPECT_EQ(grid.levels()[1].table_size, 13824u);
     EXPECT_FALSE(grid.levels()[0].hashed);
@@ -59,7 +60,7 @@ TEST(HashGrid, BatchEncodingEqualsPointByPointTrilinearInterpolation) {
     std::vector<Vec3f> x(HashGrid::kBatch);
     for (Vec3f& p : x) p = {rng.uniform(-1.5f, 1.5f), rng.uniform(-1.5f, 1.5f), rng.uniform(-1.5f, 1.5f)};
     std::vector<float> batch(x.size() * 32);
-    grid.encode_batch(params.data(), x.data(), x.size(), batch.data());
+    grid.encode_batch(params.data(), x.data(), x.size(), batch.data(), x.size());  // feature-major
     for (std::size_t i = 0; i < x.size(); ++i)
         for (int level = 0; level < 16; ++level) {
             GridCorners c;
@@ -67,10 +68,14 @@ TEST(HashGrid, BatchEncodingEqualsPointByPointTrilinearInterpolation) {
             float f[2] = {0, 0};
             for (int k = 0; k < 8; ++k)
                 for (int j = 0; j < 2; ++j)
-                    f[j] += c.weight[k] * params[(grid.levels()[std::size_t(level)].offset + c.index[k]) * 2 + std::size_t(j)];
+                    f[j] +=
+                        c.weight[k] *
+                        params[(grid.levels()[std::size_t(level)].offset + c.index[k]) * 2 + std::size_t(j)];
             // Same operations in the same order: bit-identical.
-            ASSERT_EQ(batch[i * 32 + std::size_t(2 * level)], f[0]) << "point " << i << " level " << level;
-            ASSERT_EQ(batch[i * 32 + std::size_t(2 * level) + 1], f[1]) << "point " << i << " level " << level;
+            ASSERT_EQ(batch[std::size_t(2 * level) * x.size() + i], f[0])
+                << "point " << i << " level " << level;
+            ASSERT_EQ(batch[std::size_t(2 * level + 1) * x.size() + i], f[1])
+                << "point " << i << " level " << level;
         }
 }
 

@@ -1,9 +1,8 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
 #include <tdf/field/texture_field.h>
-
-#include <gtest/gtest.h>
 
 #include <cstring>
 
@@ -19,7 +18,9 @@ std::vector<Vec3f> random_points(std::size_t n, std::uint64_t seed, const FieldD
     Rng rng(seed);
     std::vector<Vec3f> points(n);
     for (Vec3f& p : points)
-        p = {rng.uniform(d.lower.x, d.upper.x), rng.uniform(d.lower.y, d.upper.y), rng.uniform(d.lower.z, d.upper.z)};
+        p = {rng.uniform(d.lower.x, d.upper.x),
+             rng.uniform(d.lower.y, d.upper.y),
+             rng.uniform(d.lower.z, d.upper.z)};
     return points;
 }
 
@@ -132,7 +133,10 @@ TEST(TextureField, BackwardMatchesFiniteDifferencesForHeads) {
             field.parameters() = p;
             return weighted_outputs(field, points, grads);
         },
-        field.parameters(), gradient, indices, check));
+        field.parameters(),
+        gradient,
+        indices,
+        check));
 }
 
 TEST(TextureField, BackwardMatchesFiniteDifferencesForDenseAndHashedLevels) {
@@ -152,7 +156,8 @@ TEST(TextureField, BackwardMatchesFiniteDifferencesForDenseAndHashedLevels) {
         std::size_t found = 0;
         for (std::size_t e = l.offset; e < l.offset + l.table_size && found < 12; ++e)
             for (int f = 0; f < 2; ++f)
-                if (gradient[e * 2 + std::size_t(f)] != 0.0f) indices.push_back(e * 2 + std::size_t(f)), ++found;
+                if (gradient[e * 2 + std::size_t(f)] != 0.0f)
+                    indices.push_back(e * 2 + std::size_t(f)), ++found;
         EXPECT_GE(found, 8u) << "level " << level;
         indices.push_back(std::size_t(l.offset) * 2 + 1);  // most likely untouched: gradient 0
     }
@@ -163,7 +168,10 @@ TEST(TextureField, BackwardMatchesFiniteDifferencesForDenseAndHashedLevels) {
             field.parameters() = p;
             return weighted_outputs(field, points, grads);
         },
-        field.parameters(), gradient, indices, check));
+        field.parameters(),
+        gradient,
+        indices,
+        check));
 }
 
 TEST(TextureField, BackwardIsBitIdenticalOnOneAndTwoThreads) {

@@ -69,6 +69,17 @@ TEST(GuidanceRequestCheck, RejectsMismatchedShapes) {
     EXPECT_THROW(validate_request(r, "test"), Error);
 }
 
+TEST(GuidanceRequestCheck, ResultMustMatchTheInputs) {
+    const GuidanceRequest request = small_visual_request(2, 8);
+    GuidanceResult result;
+    result.refined = {Image(8, 8, 3, 1.0f), Image(8, 8, 3, 1.0f)};
+    EXPECT_NO_THROW(validate_result(request, result, "test"));
+    result.refined[1] = Image(8, 8, 1, 1.0f);
+    EXPECT_THROW(validate_result(request, result, "test"), Error);
+    result.refined.pop_back();
+    EXPECT_THROW(validate_result(request, result, "test"), Error);
+}
+
 TEST(GuidanceFactory, NoneMeansDisabledAndUnknownNamesAreErrors) {
     EXPECT_EQ(GuidanceBackend::create("none", Json::object()), nullptr);
     EXPECT_EQ(GuidanceBackend::create("none", Json()), nullptr);
@@ -84,6 +95,7 @@ TEST(GuidanceFactory, NoneMeansDisabledAndUnknownNamesAreErrors) {
     EXPECT_EQ(relief->name(), "relief_shading");
     EXPECT_TRUE(relief->supports(GuidanceKind::Visual));
     EXPECT_FALSE(relief->supports(GuidanceKind::Tactile));
+    relief->set_exemplars({Image(2, 2, 3, 0.0f)});  // ignored: relief shading uses no exemplars
     EXPECT_THROW(GuidanceBackend::create("relief_shading", Json{{"gian", 0.5}}), Error);  // misspelt key
     EXPECT_THROW(GuidanceBackend::create("external", Json::object()), Error);             // no command
     EXPECT_EQ(GuidanceBackend::names().front(), "none");

@@ -201,7 +201,10 @@ TEST(GuidanceExemplarPatchMatch, BackgroundIsKeptAndCoverageScalesTheNormals) {
 }
 
 TEST(GuidanceExemplarPatchMatch, DeterministicForSeedAndThreadCount) {
-    ExemplarPatchMatchBackend backend(small_options());
+    // Through the base interface, as a trainer would do it.
+    const auto created = GuidanceBackend::create(
+        "exemplar_patch_match", Json{{"patch_size", 5}, {"levels", 2}, {"search_iterations", 4}});
+    GuidanceBackend& backend = *created;
     backend.set_exemplars({bump_exemplar(40)});
     const Image normals = smooth_normals(40, 6);
     const Image mask(40, 40, 1, 1.0f);

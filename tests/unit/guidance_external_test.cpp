@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <memory>
 
 namespace tdf {
 namespace {
@@ -101,6 +102,17 @@ TEST(GuidanceExternal, VisualRoundTripAppliesTheProgramsTransform) {
     auto* external = dynamic_cast<ExternalBackend*>(backend.get());
     ASSERT_NE(external, nullptr);
     EXPECT_FALSE(fs::exists(external->last_call_folder()));
+}
+
+TEST(GuidanceExternal, DefaultWorkFolderIsTemporary) {
+    auto backend = std::make_unique<ExternalBackend>(
+        ExternalBackend::Options::from_json(Json{{"command", Json::array({TDF_TEST_REFINER})}}));
+    backend->refine(visual_request());
+    const fs::path work = fs::path(backend->last_call_folder()).parent_path();
+    EXPECT_EQ(work.parent_path(), fs::temp_directory_path().lexically_normal());
+    EXPECT_TRUE(fs::exists(work));
+    backend.reset();
+    EXPECT_FALSE(fs::exists(work));
 }
 
 TEST(GuidanceExternal, RequestJsonDescribesTheCall) {

@@ -17,6 +17,13 @@ TEST(GuidanceSchedule, StepRatioMatchesReference) {
     EXPECT_LT(step_ratio(10, 150, 200), 0.0);
 }
 
+TEST(GuidanceSchedule, PhasesStartAt150And151) {
+    EXPECT_FALSE(visual_guidance_active(149));
+    EXPECT_TRUE(visual_guidance_active(150));
+    EXPECT_FALSE(tactile_guidance_active(150));
+    EXPECT_TRUE(tactile_guidance_active(151));
+}
+
 TEST(GuidanceSchedule, VisualStrengthRunsFromHalfToSevenTenths) {
     EXPECT_NEAR(visual_guidance_strength(150), 0.504, 1e-12);
     EXPECT_NEAR(visual_guidance_strength(199), 0.7, 1e-12);

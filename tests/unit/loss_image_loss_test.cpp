@@ -1,9 +1,8 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/loss/image_loss.h>
 #include <tdf/loss/tactile_loss.h>
-
-#include <gtest/gtest.h>
 
 #include <cstring>
 
@@ -30,8 +29,12 @@ Vec3f* as_vec3(float* v) { return reinterpret_cast<Vec3f*>(v); }
 
 TEST(ImageLoss, MseAndL1ValuesAndGradients) {
     const auto pred = random_values(300, 0, 1, 1), target = random_values(300, 0, 1, 2);
-    auto mse = [&](const std::vector<float>& p, float* g) { return mse_loss(p.data(), target.data(), p.size(), g); };
-    auto l1 = [&](const std::vector<float>& p, float* g) { return l1_loss(p.data(), target.data(), p.size(), g); };
+    auto mse = [&](const std::vector<float>& p, float* g) {
+        return mse_loss(p.data(), target.data(), p.size(), g);
+    };
+    auto l1 = [&](const std::vector<float>& p, float* g) {
+        return l1_loss(p.data(), target.data(), p.size(), g);
+    };
     double expected_mse = 0, expected_l1 = 0;
     for (std::size_t i = 0; i < 300; ++i) {
         expected_mse += (double(pred[i]) - target[i]) * (double(pred[i]) - target[i]) / 300;
@@ -39,12 +42,13 @@ TEST(ImageLoss, MseAndL1ValuesAndGradients) {
     }
     EXPECT_NEAR(mse(pred, nullptr), expected_mse, 1e-12);
     EXPECT_NEAR(l1(pred, nullptr), expected_l1, 1e-12);
-    EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return mse(p, nullptr); }, pred, analytic(pred, mse)));
+    EXPECT_TRUE(check_gradient(
+        [&](const std::vector<float>& p) { return mse(p, nullptr); }, pred, analytic(pred, mse)));
     // L1 is piecewise linear: a small step never crosses a kink for these random values.
     test::GradCheckConfig small;
     small.step = 1e-5;
-    EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return l1(p, nullptr); }, pred, analytic(pred, l1), {},
-                               small));
+    EXPECT_TRUE(check_gradient(
+        [&](const std::vector<float>& p) { return l1(p, nullptr); }, pred, analytic(pred, l1), {}, small));
     // Gradients accumulate with the weight.
     std::vector<float> g(300, 1.0f);
     mse_loss(pred.data(), target.data(), 300, g.data(), 0.5f);
@@ -55,18 +59,26 @@ TEST(ImageLoss, MseAndL1ValuesAndGradients) {
 TEST(ImageLoss, MeanColourMseMatchesDefinitionAndGradient) {
     const ImageBatchShape shape{2, 5, 4, 3};
     const auto pred = random_values(shape.values(), 0, 1, 3), target = random_values(shape.values(), 0, 1, 4);
-    auto loss = [&](const std::vector<float>& p, float* g) { return mean_colour_mse_loss(p.data(), target.data(), shape, g); };
+    auto loss = [&](const std::vector<float>& p, float* g) {
+        return mean_colour_mse_loss(p.data(), target.data(), shape, g);
+    };
     double expected = 0;
     for (int img = 0; img < 2; ++img)
         for (int c = 0; c < 3; ++c) {
             double d = 0;
-            for (int k = 0; k < 20; ++k) d += double(pred[std::size_t((img * 20 + k) * 3 + c)]) - target[std::size_t((img * 20 + k) * 3 + c)];
+            for (int k = 0; k < 20; ++k)
+                d += double(pred[std::size_t((img * 20 + k) * 3 + c)]) -
+                     target[std::size_t((img * 20 + k) * 3 + c)];
             expected += (d / 20) * (d / 20) / 6;
         }
     EXPECT_NEAR(loss(pred, nullptr), expected, 1e-12);
     test::GradCheckConfig config;
     config.abs_floor = 1e-4;
-    EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return loss(p, nullptr); }, pred, analytic(pred, loss), {}, config));
+    EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return loss(p, nullptr); },
+                               pred,
+                               analytic(pred, loss),
+                               {},
+                               config));
 }
 
 TEST(ImageLoss, CosineLossMatchesTorchSemantics) {
@@ -94,8 +106,10 @@ TEST(ImageLoss, CosineAndMaskedCosineGradients) {
     auto masked = [&](const std::vector<float>& p, float* g) {
         return masked_cosine_loss(as_vec3(p), as_vec3(target), mask.data(), n, g ? as_vec3(g) : nullptr);
     };
-    EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return cos(p, nullptr); }, pred, analytic(pred, cos)));
-    EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return masked(p, nullptr); }, pred, analytic(pred, masked)));
+    EXPECT_TRUE(check_gradient(
+        [&](const std::vector<float>& p) { return cos(p, nullptr); }, pred, analytic(pred, cos)));
+    EXPECT_TRUE(check_gradient(
+        [&](const std::vector<float>& p) { return masked(p, nullptr); }, pred, analytic(pred, masked)));
     // Masked-out vectors get no gradient; the masked loss counts them with cos 0.
     const auto g = analytic(pred, masked);
     EXPECT_EQ(g[0], 0.0f);
@@ -107,7 +121,9 @@ TEST(ImageLoss, SsimIsOneForIdenticalImagesAndGradientMatches) {
     const auto target = random_values(shape.values(), 0, 1, 7);
     auto pred = target;
     const auto noise = random_values(shape.values(), -0.2f, 0.2f, 8);
-    auto loss = [&](const std::vector<float>& p, float* g) { return ssim_loss(p.data(), target.data(), shape, g); };
+    auto loss = [&](const std::vector<float>& p, float* g) {
+        return ssim_loss(p.data(), target.data(), shape, g);
+    };
     EXPECT_NEAR(loss(pred, nullptr), 0.0, 1e-6);
     for (std::size_t i = 0; i < pred.size(); ++i) pred[i] += noise[i];
     const double value = loss(pred, nullptr);
@@ -117,8 +133,11 @@ TEST(ImageLoss, SsimIsOneForIdenticalImagesAndGradientMatches) {
     for (std::size_t i = 0; i < pred.size(); i += 7) indices.push_back(i);
     test::GradCheckConfig config;
     config.abs_floor = 1e-4;
-    EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return loss(p, nullptr); }, pred, analytic(pred, loss),
-                               indices, config));
+    EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return loss(p, nullptr); },
+                               pred,
+                               analytic(pred, loss),
+                               indices,
+                               config));
 }
 
 TEST(TactileLoss, GuidanceMetricsAndGradients) {
@@ -128,17 +147,20 @@ TEST(TactileLoss, GuidanceMetricsAndGradients) {
         auto loss = [&](const std::vector<float>& p, float* g) {
             return tactile_guidance_loss(metric, as_vec3(p), as_vec3(refined), n, g ? as_vec3(g) : nullptr);
         };
-        EXPECT_TRUE(check_gradient([&](const std::vector<float>& p) { return loss(p, nullptr); }, pred, analytic(pred, loss)));
+        EXPECT_TRUE(check_gradient(
+            [&](const std::vector<float>& p) { return loss(p, nullptr); }, pred, analytic(pred, loss)));
     }
     EXPECT_NEAR(tactile_guidance_loss(TactileGuidanceMetric::Mse, as_vec3(pred), as_vec3(refined), n),
-                mse_loss(pred.data(), refined.data(), 3 * n), 0.0);
+                mse_loss(pred.data(), refined.data(), 3 * n),
+                0.0);
     EXPECT_EQ(parse_tactile_guidance_metric("cosine", "k"), TactileGuidanceMetric::Cosine);
     EXPECT_THROW(parse_tactile_guidance_metric("l2", "k"), Error);
 }
 
 TEST(ImageLoss, ValuesAndGradientsAreBitIdenticalOnOneAndTwoThreads) {
     const ImageBatchShape shape{2, 130, 70, 3};
-    const auto pred = random_values(shape.values(), 0, 1, 11), target = random_values(shape.values(), 0, 1, 12);
+    const auto pred = random_values(shape.values(), 0, 1, 11),
+               target = random_values(shape.values(), 0, 1, 12);
     auto run = [&](int threads, std::vector<float>& g) {
         ThreadLimit limit(threads);
         g.assign(pred.size(), 0.0f);

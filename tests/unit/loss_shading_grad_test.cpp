@@ -1,7 +1,6 @@
+#include <gtest/gtest.h>
 #include <tdf/core/rng.h>
 #include <tdf/loss/shading_grad.h>
-
-#include <gtest/gtest.h>
 
 #include "common/gradcheck.h"
 
@@ -46,12 +45,16 @@ TEST(ShadingGrad, TbnCompositionBackwardMatchesFiniteDifferences) {
     Rng rng(3);
     for (int trial = 0; trial < 20; ++trial) {
         const TangentFrame f = random_frame(rng, trial % 2 ? 1.0f : -1.0f);
-        const Vec3f p = safe_normalize({rng.uniform(-0.7f, 0.7f), rng.uniform(-0.7f, 0.7f), rng.uniform(0.3f, 1)});
+        const Vec3f p =
+            safe_normalize({rng.uniform(-0.7f, 0.7f), rng.uniform(-0.7f, 0.7f), rng.uniform(0.3f, 1)});
         const Vec3f upstream(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
         const Vec3f d = compose_shading_normal_backward(f, p, upstream);
         EXPECT_TRUE(check_gradient(
-            [&](const std::vector<float>& x) { return double(dot(compose_shading_normal(f, to_vec(x)), upstream)); },
-            {p.x, p.y, p.z}, {d.x, d.y, d.z}))
+            [&](const std::vector<float>& x) {
+                return double(dot(compose_shading_normal(f, to_vec(x)), upstream));
+            },
+            {p.x, p.y, p.z},
+            {d.x, d.y, d.z}))
             << "trial " << trial;
     }
 }
@@ -67,8 +70,11 @@ TEST(ShadingGrad, ViewSpaceNormalBackwardMatchesFiniteDifferences) {
         const Vec3f upstream(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
         const Vec3f d = view_space_normal_backward(r, n, upstream);
         EXPECT_TRUE(check_gradient(
-            [&](const std::vector<float>& x) { return double(dot(view_space_normal(r, to_vec(x)), upstream)); },
-            {n.x, n.y, n.z}, {d.x, d.y, d.z}))
+            [&](const std::vector<float>& x) {
+                return double(dot(view_space_normal(r, to_vec(x)), upstream));
+            },
+            {n.x, n.y, n.z},
+            {d.x, d.y, d.z}))
             << "trial " << trial;
         // A rotation preserves length: the view normal of a unit normal is unit.
         EXPECT_NEAR(length(view_space_normal(r, safe_normalize(n))), 1.0f, 1e-6f);
@@ -85,5 +91,6 @@ TEST(ShadingGrad, LambertShadeValuesAndAlbedoGradient) {
     const Vec3f d = lambertian_backward(shade, upstream);
     EXPECT_TRUE(check_gradient(
         [&](const std::vector<float>& x) { return double(dot(lambertian(to_vec(x), shade), upstream)); },
-        {albedo.x, albedo.y, albedo.z}, {d.x, d.y, d.z}));
+        {albedo.x, albedo.y, albedo.z},
+        {d.x, d.y, d.z}));
 }

@@ -1,7 +1,6 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/optim/adam.h>
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
@@ -22,7 +21,8 @@ namespace {
 std::vector<float> gradient_at(const std::vector<float>& p, int step) {
     // A deterministic, step-dependent gradient (quadratic bowl plus a wobble).
     std::vector<float> g(p.size());
-    for (std::size_t i = 0; i < p.size(); ++i) g[i] = 2.0f * (p[i] - float(i % 7)) + 0.1f * float((step + int(i)) % 3);
+    for (std::size_t i = 0; i < p.size(); ++i)
+        g[i] = 2.0f * (p[i] - float(i % 7)) + 0.1f * float((step + int(i)) % 3);
     return g;
 }
 }  // namespace

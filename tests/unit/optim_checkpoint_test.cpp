@@ -1,8 +1,7 @@
+#include <gtest/gtest.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/optim/checkpoint.h>
-
-#include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
@@ -48,11 +47,13 @@ TEST(Checkpoint, DamagedFilesAreRejectedWithTheirName) {
     std::string flipped = bytes;
     flipped[200] = char(flipped[200] ^ 0x10);
     const std::string corrupt = write_bytes("corrupt.ckpt", flipped);
-    const std::string other = write_bytes("other.ckpt", "P6 not a checkpoint at all, but long enough to have a header");
+    const std::string other =
+        write_bytes("other.ckpt", "P6 not a checkpoint at all, but long enough to have a header");
     std::string future = bytes;
     future[8] = 9;
     const std::string version = write_bytes("version.ckpt", future);
-    for (const std::string& path : {truncated, corrupt, other, version, test::scratch_dir() + "/missing.ckpt"}) {
+    for (const std::string& path :
+         {truncated, corrupt, other, version, test::scratch_dir() + "/missing.ckpt"}) {
         try {
             load_field_checkpoint(path);
             ADD_FAILURE() << path << " was accepted";

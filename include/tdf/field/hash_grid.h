@@ -18,19 +18,19 @@ namespace tdf {
 
 /// Encoding hyper-parameters; the defaults are the reference's (spec 4.1).
 struct HashGridConfig {
-    int levels = 16;              ///< number of resolution levels, 1..kMaxLevels
-    int log2_table_size = 15;     ///< entries per hashed level = 2^log2_table_size, 4..24
-    int base_resolution = 16;     ///< resolution parameter of level 0, >= 2
-    float per_level_scale = 1.5f; ///< growth of the scale from one level to the next, >= 1
+    int levels = 16;               ///< number of resolution levels, 1..kMaxLevels
+    int log2_table_size = 15;      ///< entries per hashed level = 2^log2_table_size, 4..24
+    int base_resolution = 16;      ///< resolution parameter of level 0, >= 2
+    float per_level_scale = 1.5f;  ///< growth of the scale from one level to the next, >= 1
 };
 
 /// One level of the grid.
 struct HashGridLevel {
-    float scale = 0;               ///< pos = scale * x + 0.5 (tcnn `grid_scale`)
-    std::uint32_t resolution = 0;  ///< ceil(scale) + 1 cells per axis (tcnn `grid_resolution`)
-    std::uint32_t table_size = 0;  ///< entries of this level (multiple of 8)
-    std::uint32_t offset = 0;      ///< first entry of this level in the grid
-    bool hashed = false;           ///< true: CoherentPrime hash; false: dense stride indexing
+    float scale = 0;                 ///< pos = scale * x + 0.5 (tcnn `grid_scale`)
+    std::uint32_t resolution = 0;    ///< ceil(scale) + 1 cells per axis (tcnn `grid_resolution`)
+    std::uint32_t table_size = 0;    ///< entries of this level (multiple of 8)
+    std::uint32_t offset = 0;        ///< first entry of this level in the grid
+    bool hashed = false;             ///< true: CoherentPrime hash; false: dense stride indexing
     std::uint64_t modulo_magic = 0;  ///< Lemire fastmod constant for `% table_size`
 };
 
@@ -63,7 +63,8 @@ public:
     static constexpr float kMaxCoordinate = 1000.0f;
     /// Clamps a grid coordinate to [-kMaxCoordinate, kMaxCoordinate]; NaN becomes 0.
     static float sanitize_coordinate(float v) {
-        return v >= -kMaxCoordinate ? (v <= kMaxCoordinate ? v : kMaxCoordinate) : (v < 0 ? -kMaxCoordinate : 0.0f);
+        return v >= -kMaxCoordinate ? (v <= kMaxCoordinate ? v : kMaxCoordinate)
+                                    : (v < 0 ? -kMaxCoordinate : 0.0f);
     }
 
     /// The corners and weights of level `level` around grid-space point `x` (tcnn
@@ -74,18 +75,22 @@ public:
     static constexpr std::size_t kBatch = 64;
 
     /// Writes the feature_count() features of grid-space point `x` to `features`.
-    void encode(const float* grid_params, Vec3f x, float* features) const { encode_batch(grid_params, &x, 1, features); }
+    void encode(const float* grid_params, Vec3f x, float* features) const {
+        encode_batch(grid_params, &x, 1, features, 1);
+    }
 
-    /// Encodes `count` <= kBatch grid-space points `x` into `features` (count rows of
-    /// feature_count() floats). Level by level, with the corner indices of the whole batch
-    /// computed and prefetched before they are read, so cache misses on the fine levels overlap.
-    void encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features) const;
+    /// Encodes `count` <= kBatch grid-space points `x`, feature-major: feature k of point i goes
+    /// to `features[k * stride + i]` (stride >= count), the layout the heads read 8 points per
+    /// instruction. Level by level, with the batch's corner indices computed (vectorized) and
+    /// prefetched before they are read, so cache misses on the hashed levels overlap.
+    void encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features,
+                      std::size_t stride) const;
 
     /// Adds d(features of `level`)/d(grid params)^T * d for `count` <= kBatch points: for point
     /// i, `d_features[2i], d_features[2i+1]` (dL/d features 2l, 2l+1) are spread over its 8
     /// corners, in point order (so the sums are deterministic). Points with d = (0,0) are skipped.
-    void accumulate_level_gradient_batch(int level, const Vec3f* x, std::size_t count, const float* d_features,
-                                         float* grid_gradient) const;
+    void accumulate_level_gradient_batch(int level, const Vec3f* x, std::size_t count,
+                                         const float* d_features, float* grid_gradient) const;
 
 private:
     HashGridConfig m_config;
@@ -133,7 +138,8 @@ inline void HashGrid::corners(int level, Vec3f x, GridCorners& out) const {
         ay[0] = g[1] * r, ay[1] = (g[1] + 1u) * r;
         az[0] = g[2] * r2, az[1] = (g[2] + 1u) * r2;
         for (int c = 0; c < 8; ++c)
-            out.index[c] = detail::fast_mod(ax[c & 1] + ay[(c >> 1) & 1] + az[c >> 2], l.modulo_magic, l.table_size);
+            out.index[c] =
+                detail::fast_mod(ax[c & 1] + ay[(c >> 1) & 1] + az[c >> 2], l.modulo_magic, l.table_size);
     }
     const float wx[2] = {1.0f - w1[0], w1[0]}, wy[2] = {1.0f - w1[1], w1[1]}, wz[2] = {1.0f - w1[2], w1[2]};
     for (int c = 0; c < 8; ++c) out.weight[c] = wx[c & 1] * wy[(c >> 1) & 1] * wz[c >> 2];

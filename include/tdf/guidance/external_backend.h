@@ -59,6 +59,8 @@ public:
     };
 
     explicit ExternalBackend(Options options);
+    /// Removes the default temporary work folder when it is empty (kept call folders stay).
+    ~ExternalBackend() override;
 
     std::string name() const override { return kName; }
     bool supports(GuidanceKind kind) const override;
@@ -72,6 +74,7 @@ public:
 private:
     Options m_options;
     std::string m_work_folder;
+    bool m_temporary_work_folder = false;
     int m_calls = 0;
     std::string m_last_call_folder;
 };

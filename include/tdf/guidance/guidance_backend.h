@@ -115,6 +115,11 @@ public:
     /// Refines request.images into targets. Deterministic for a given request (seed included).
     /// Throws tdf::Error for unsupported kinds, malformed requests, or external failures.
     virtual GuidanceResult refine(const GuidanceRequest& request) = 0;
+    /// Gives the backend the touched tactile exemplars: tangent-space normal maps (OpenGL
+    /// convention, green = up), 3 channels in [-1, 1]. Backends that build on them
+    /// (exemplar_patch_match) replace their exemplars; the others ignore the call, so a trainer
+    /// can always make it. Throws tdf::Error for unusable exemplars.
+    virtual void set_exemplars(std::vector<Image> tangent_normals) { (void)tangent_normals; }
 
     /// Creates a backend by name from its JSON config object (unknown keys are an error):
     /// "none" -> nullptr (guidance disabled), "exemplar_patch_match", "relief_shading",

@@ -23,6 +23,11 @@ constexpr double kTactileGuidanceStrength = 0.8;
 /// spec 13.21). Requires iters_total > iters_init. Negative before the refinement starts.
 double step_ratio(int iteration, int iters_init, int iters_total);
 
+/// Whether visual guidance runs at loop index `iteration`: i >= iters_init (spec 5.1).
+inline bool visual_guidance_active(int iteration, int iters_init = 150) { return iteration >= iters_init; }
+/// Whether tactile guidance runs at loop index `iteration`: i > iters_init (spec 5.1, 9).
+inline bool tactile_guidance_active(int iteration, int iters_init = 150) { return iteration > iters_init; }
+
 /// Visual guidance strength at loop index `iteration`:
 /// `0.5 + step_ratio * (0.7 - 0.5)` (spec 5.4), 0.504 at i = 150, 0.7 at i = 199.
 double visual_guidance_strength(int iteration, int iters_init = 150, int iters_total = 200);

@@ -34,7 +34,9 @@ inline Vec3f tbn_product(const TangentFrame& f, Vec3f p) {
 
 /// World shading normal n_s = normalize(T px + w (N x T) py + N pz) (spec 3.3, the
 /// reference's safe_normalize: x / sqrt(max(|x|^2, 1e-20))).
-inline Vec3f compose_shading_normal(const TangentFrame& f, Vec3f p) { return safe_normalize(tbn_product(f, p)); }
+inline Vec3f compose_shading_normal(const TangentFrame& f, Vec3f p) {
+    return safe_normalize(tbn_product(f, p));
+}
 
 /// dL/dp from dL/dn_s for compose_shading_normal (the frame is a constant).
 inline Vec3f compose_shading_normal_backward(const TangentFrame& f, Vec3f p, Vec3f d_shading_normal) {

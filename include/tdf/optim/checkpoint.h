@@ -20,8 +20,8 @@ struct FieldCheckpoint {
 };
 
 /// Writes `path` atomically; throws tdf::Error when it cannot be written (disk full, ...).
-void save_field_checkpoint(const std::string& path, const std::vector<float>& parameters, const AdamState& adam,
-                           const std::string& extra = {});
+void save_field_checkpoint(const std::string& path, const std::vector<float>& parameters,
+                           const AdamState& adam, const std::string& extra = {});
 
 /// Reads a checkpoint; throws tdf::Error naming `path` when it is missing, not a checkpoint,
 /// of another version, truncated, or fails its checksum.
