@@ -202,6 +202,9 @@ Command register_tactile(CLI::App& root) {
     s->convert_quilt.add(s->convert, true);
     s->normal.add(s->convert);
 
+    // Global flags (--threads, -q) may follow the step, as they may follow other commands.
+    for (CLI::App* step : {s->height, s->patch_cmd, s->quilt_cmd, s->normal_cmd, s->convert}) step->fallthrough();
+
     Command command;
     command.app = app;
     command.run = [s]() -> int {

@@ -53,7 +53,9 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
     for (float& v : patch.values()) v -= lo;
     HeightMap out;
     out.source = raw.source;
-    out.reference_scale_mm = hi - lo;
+    // Integrated normal maps already have true slopes: the reference's amplitude rule would
+    // distort them, so they keep physical amplitude (normal_map_from_height, Amplitude::Auto).
+    if (input.kind != "normal map") out.reference_scale_mm = hi - lo;
     out.mm_per_pixel = raw.mm_per_pixel;
     if (options.size > 0 && options.size != side) {
         patch = resize_lanczos(patch, options.size, options.size);

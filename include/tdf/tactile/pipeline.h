@@ -44,7 +44,8 @@ struct PatchSteps {
 
 /// Step 1: high-pass, smoothing, contact crop (a centred square when the crop is off),
 /// resampling. The result is in mm with minimum 0; mm_per_pixel follows the resampling and
-/// reference_scale_mm is the crop's height range (spec 6.2 step 6). Throws tdf::Error
+/// reference_scale_mm is the crop's height range (spec 6.2 step 6), except for integrated
+/// normal maps, whose slopes are already true (0: physical amplitude). Throws tdf::Error
 /// (naming the input) for an empty contact mask or a flat patch (range <= 1e-6 mm).
 HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, PatchSteps* steps = nullptr);
 
