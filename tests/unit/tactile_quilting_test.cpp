@@ -1,0 +1,188 @@
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+#include <tdf/core/rng.h>
+#include <tdf/tactile/height_input.h>
+#include <tdf/tactile/pipeline.h>
+#include <tdf/tactile/quilting.h>
+
+#include "common/test_paths.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+using namespace tdf;
+
+namespace {
+
+const std::string kStrawberry = "tactile/gelsight_raw/strawberry_00000_gxgy.npz";
+
+// A stochastic texture with structure at several scales (sums of random oriented waves).
+Image synthetic_texture(int size, std::uint64_t seed, int channels = 1) {
+    Rng rng(seed);
+    Image image(size, size, channels);
+    for (int wave = 0; wave < 12; ++wave) {
+        const float angle = rng.uniform(0.0f, 6.2831853f), frequency = rng.uniform(0.05f, 0.4f);
+        const float phase = rng.uniform(0.0f, 6.2831853f), amplitude = rng.uniform(0.2f, 1.0f);
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x)
+                for (int c = 0; c < channels; ++c)
+                    image.at(x, y, c) += amplitude * std::sin(frequency * (std::cos(angle) * float(x) +
+                                                                           std::sin(angle) * float(y)) + phase + float(c));
+    }
+    return image;
+}
+
+// Mean squared difference between horizontally adjacent columns x and x+1 (wrapping), over
+// all rows: a seam shows up as a column pair far above the typical one.
+double column_step(const Image& image, int x) {
+    double sum = 0;
+    const int next = (x + 1) % image.width();
+    for (int y = 0; y < image.height(); ++y) {
+        const double d = double(image.at(next, y, 0)) - image.at(x, y, 0);
+        sum += d * d;
+    }
+    return sum / image.height();
+}
+double row_step(const Image& image, int y) {
+    double sum = 0;
+    const int next = (y + 1) % image.height();
+    for (int x = 0; x < image.width(); ++x) {
+        const double d = double(image.at(x, next, 0)) - image.at(x, y, 0);
+        sum += d * d;
+    }
+    return sum / image.width();
+}
+
+template <typename F>
+std::string error_of(F&& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+}  // namespace
+
+TEST(Quilting, SameSeedSameOutputOnOneAndTwoThreads) {
+    const std::vector<Image> exemplars = {synthetic_texture(72, 1), synthetic_texture(64, 2)};
+    QuiltOptions options;
+    options.size = 150;
+    options.block = 16;
+    options.seed = 7;
+    for (bool tileable : {false, true}) {
+        options.tileable = tileable;
+        Image one, two;
+        {
+            ThreadLimit limit(1);
+            one = quilt(exemplars, options).image;
+        }
+        {
+            ThreadLimit limit(2);
+            two = quilt(exemplars, options).image;
+        }
+        EXPECT_EQ(one.values(), two.values()) << "tileable " << tileable;
+        options.seed = 8;
+        EXPECT_NE(quilt(exemplars, options).image.values(), one.values()) << "the seed has no effect";
+        options.seed = 7;
+    }
+}
+
+TEST(Quilting, OutputSizesAndCopiesExemplarValues) {
+    const Image exemplar = synthetic_texture(64, 3, 3);
+    QuiltOptions options;
+    options.size = 100;
+    options.block = 20;
+    const QuiltResult plain = quilt({exemplar}, options);
+    EXPECT_EQ(plain.image.width(), 100);
+    EXPECT_EQ(plain.image.channels(), 3);
+    options.tileable = true;
+    EXPECT_EQ(quilt_output_side(options), 100);  // stride 10
+    options.size = 1024;
+    options.block = 40;
+    EXPECT_EQ(quilt_output_side(options), 1020);
+    // Every output pixel is a copy of some exemplar pixel (quilting never blends).
+    const Image& out = plain.image;
+    for (int y = 0; y < out.height(); y += 7)
+        for (int x = 0; x < out.width(); x += 7) {
+            bool found = false;
+            for (std::size_t p = 0; p < exemplar.pixel_count() && !found; ++p)
+                found = exemplar.data()[3 * p] == out.at(x, y, 0) && exemplar.data()[3 * p + 1] == out.at(x, y, 1);
+            ASSERT_TRUE(found) << x << "," << y;
+        }
+}
+
+TEST(Quilting, BoundaryCutsAreFarBetterThanRandomPlacement) {
+    QuiltOptions options;
+    options.size = 256;
+    options.block = 24;
+    const QuiltResult result = quilt({synthetic_texture(96, 4)}, options);
+    RecordProperty("cut_error", std::to_string(result.stats.mean_cut_error));
+    RecordProperty("random_error", std::to_string(result.stats.mean_random_error));
+    EXPECT_GT(result.stats.mean_random_error, 0.0);
+    EXPECT_LT(result.stats.mean_cut_error, 0.1 * result.stats.mean_random_error);
+}
+
+TEST(Quilting, TileableOutputHasNoWrapSeam) {
+    QuiltOptions options;
+    options.size = 160;
+    options.block = 20;
+    options.tileable = true;
+    const Image exemplar = synthetic_texture(80, 5);
+    const Image tiled = quilt({exemplar}, options).image;
+    options.tileable = false;
+    const Image plain = quilt({exemplar}, options).image;
+    // Typical step between neighbouring columns/rows inside vs. across the wrap-around.
+    auto interior = [](const Image& image, bool columns) {
+        double sum = 0;
+        const int n = (columns ? image.width() : image.height()) - 1;
+        for (int i = 0; i < n; ++i) sum += columns ? column_step(image, i) : row_step(image, i);
+        return sum / n;
+    };
+    for (bool columns : {true, false}) {
+        const double wrap_tiled = columns ? column_step(tiled, tiled.width() - 1) : row_step(tiled, tiled.height() - 1);
+        const double wrap_plain = columns ? column_step(plain, plain.width() - 1) : row_step(plain, plain.height() - 1);
+        const double inside = interior(tiled, columns);
+        RecordProperty(columns ? "wrap_columns_ratio" : "wrap_rows_ratio", std::to_string(wrap_tiled / inside));
+        EXPECT_LT(wrap_tiled, 2.0 * inside) << (columns ? "columns" : "rows");
+        EXPECT_GT(wrap_plain, 4.0 * interior(plain, columns)) << "the criterion cannot see a seam";
+    }
+}
+
+TEST(Quilting, BadInputGivesClearErrors) {
+    QuiltOptions options;
+    options.block = 40;
+    options.size = 128;
+    const std::string small = error_of([&] { quilt({Image(30, 64, 1)}, options, {"small.exr"}); });
+    EXPECT_NE(small.find("small.exr"), std::string::npos) << small;
+    EXPECT_NE(small.find("smaller than the block size 40"), std::string::npos) << small;
+    Image nan = synthetic_texture(64, 6);
+    nan.at(5, 5, 0) = std::nanf("");
+    EXPECT_NE(error_of([&] { quilt({nan}, options, {"nan.exr"}); }).find("nan.exr"), std::string::npos);
+    EXPECT_NE(error_of([&] { quilt({Image(64, 64, 1), Image(64, 64, 3)}, options); }).find("channels"), std::string::npos);
+    options.overlap = 0.8f;
+    EXPECT_NE(error_of([&] { quilt({Image(64, 64, 1)}, options); }).find("--overlap"), std::string::npos);
+    // A constant exemplar is no error: every candidate matches exactly.
+    options.overlap = 0.5f;
+    const QuiltResult flat = quilt({Image(64, 64, 1, 0.25f)}, options);
+    for (float v : flat.image.values()) ASSERT_EQ(v, 0.25f);
+}
+
+TEST(Quilting, StrawberryPatchQuiltsWithoutVisibleSeams) {
+    TDF_REQUIRE_SHARED_DATA(kStrawberry);
+    const HeightMap patch = extract_patch(load_height_input(test::shared_data_dir() + "/" + kStrawberry), PatchOptions{});
+    QuiltOptions options;
+    options.size = 400;
+    options.block = 40;
+    options.tileable = true;
+    QuiltStats stats;
+    const HeightMap quilted = quilt_height_maps({patch}, options, &stats);
+    EXPECT_EQ(quilted.height.width(), 400);
+    EXPECT_FLOAT_EQ(quilted.mm_per_pixel, patch.mm_per_pixel);
+    RecordProperty("cut_error_mm2", std::to_string(stats.mean_cut_error));
+    RecordProperty("random_error_mm2", std::to_string(stats.mean_random_error));
+    EXPECT_LT(stats.mean_cut_error, 0.05 * stats.mean_random_error);
+}
