@@ -1,6 +1,5 @@
-#include <tdf/tactile/contact_mask.h>
-
 #include <tdf/core/error.h>
+#include <tdf/tactile/contact_mask.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -58,11 +57,14 @@ ContactRegion find_contact_region(const Image& height, float depth_threshold, co
     const int w = height.width(), h = height.height();
     std::vector<std::uint8_t> above(std::size_t(w) * std::size_t(h));
     bool any = false;
-    for (std::size_t i = 0; i < above.size(); ++i) any |= (above[i] = height.data()[i] > depth_threshold) != 0;
+    for (std::size_t i = 0; i < above.size(); ++i)
+        any |= (above[i] = height.data()[i] > depth_threshold) != 0;
     if (!any)
-        throw_error("{}: empty contact mask: no pixel is higher than the depth threshold {} mm (try "
-                    "--depth-threshold, --invert, or --no-contact-mask)",
-                    what, depth_threshold);
+        throw_error(
+            "{}: empty contact mask: no pixel is higher than the depth threshold {} mm (try "
+            "--depth-threshold, --invert, or --no-contact-mask)",
+            what,
+            depth_threshold);
 
     // Dilate once with a 5x5 square (pixels outside the image do not count).
     std::vector<std::uint8_t> dilated(above.size(), 0);
@@ -72,7 +74,8 @@ ContactRegion find_contact_region(const Image& height, float depth_threshold, co
             for (int dy = -2; dy <= 2 && !hit; ++dy)
                 for (int dx = -2; dx <= 2 && !hit; ++dx) {
                     const int sx = x + dx, sy = y + dy;
-                    hit = sx >= 0 && sx < w && sy >= 0 && sy < h && above[std::size_t(sy) * std::size_t(w) + std::size_t(sx)];
+                    hit = sx >= 0 && sx < w && sy >= 0 && sy < h &&
+                          above[std::size_t(sy) * std::size_t(w) + std::size_t(sx)];
                 }
             dilated[std::size_t(y) * std::size_t(w) + std::size_t(x)] = hit;
         }

@@ -1,8 +1,7 @@
-#include <tdf/tactile/height_input.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
+#include <tdf/tactile/height_input.h>
 #include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/npy_reader.h>
 #include <tdf/tactile/poisson.h>
@@ -18,14 +17,16 @@ namespace {
 // A 2-D numeric array as a 1-channel image; `name` for messages.
 Image array_image(const NpyArray& array, const std::string& where) {
     if (array.shape.size() != 2 || array.shape[0] < 3 || array.shape[1] < 3)
-        throw_error("{}: expected a 2-D array of at least 3x3, got shape ({})", where,
-                    fmt::join(array.shape, ", "));
+        throw_error(
+            "{}: expected a 2-D array of at least 3x3, got shape ({})", where, fmt::join(array.shape, ", "));
     if (array.dtype.size() < 2 || array.dtype[1] != 'f')
         throw_error("{}: expected a float array, got dtype '{}'", where, array.dtype);
     Image image(int(array.shape[1]), int(array.shape[0]), 1);
     for (std::size_t i = 0; i < array.values.size(); ++i) {
         if (!std::isfinite(array.values[i]))
-            throw_error("{}: NaN or infinite value at row {}, column {}", where, i / array.shape[1],
+            throw_error("{}: NaN or infinite value at row {}, column {}",
+                        where,
+                        i / array.shape[1],
                         i % array.shape[1]);
         image.data()[i] = float(array.values[i]);
     }
@@ -38,7 +39,8 @@ const NpyArray& member(const std::map<std::string, NpyArray>& arrays, const std:
     if (it == arrays.end()) {
         std::string names;
         for (const auto& entry : arrays) names += (names.empty() ? "" : ", ") + entry.first;
-        throw_error("{}: no '{}' array (the archive holds: {})", path, name, names.empty() ? "nothing" : names);
+        throw_error(
+            "{}: no '{}' array (the archive holds: {})", path, name, names.empty() ? "nothing" : names);
     }
     return it->second;
 }
@@ -48,7 +50,8 @@ HeightInput load_npz(const std::string& path, const HeightInputOptions& options)
     HeightInput input;
     input.capture = true;
     CaptureSource source = options.source;
-    if (source == CaptureSource::Auto) source = arrays.count("dm") ? CaptureSource::DepthMap : CaptureSource::Gradients;
+    if (source == CaptureSource::Auto)
+        source = arrays.count("dm") ? CaptureSource::DepthMap : CaptureSource::Gradients;
     if (source == CaptureSource::DepthMap) {
         input.map.height = array_image(member(arrays, "dm", path), path + ": dm");
         input.kind = "npz dm";
@@ -87,9 +90,7 @@ HeightInput load_image(const std::string& path, const HeightInputOptions& option
             for (float& v : input.map.height.values()) v *= options.image_height_mm;
         input.kind = "height image";
     } else {
-        if (image.channels() < 3)
-            throw_error("{}: a {}-channel image cannot be a normal map", path, image.channels());
-        const TactileMap normals = load_tactile_map(path);
+        const TactileMap normals = decode_tactile_map(image, metadata, path);
         input.map.height = height_from_normals(normals.normals, 0.1f, path);
         input.kind = "normal map";
         // Integrated heights are in pixel widths; mm need the pixel size (set below).
@@ -119,8 +120,11 @@ HeightInput load_height_input(const std::string& path, const HeightInputOptions&
     if (options.mm_per_pixel > 0) input.map.mm_per_pixel = options.mm_per_pixel;
     if (input.map.mm_per_pixel <= 0) {
         input.map.mm_per_pixel = kGelSightMiniMmPerPixel;
-        log_info("{}: no pixel size in the file; assuming a GelSight Mini ({} mm per pixel, --mm-per-pixel to change)",
-                 path, kGelSightMiniMmPerPixel);
+        log_info(
+            "{}: no pixel size in the file; assuming a GelSight Mini ({} mm per pixel, --mm-per-pixel to "
+            "change)",
+            path,
+            kGelSightMiniMmPerPixel);
     }
     if (input.kind == "normal map")
         for (float& v : input.map.height.values()) v *= input.map.mm_per_pixel;

@@ -1,6 +1,5 @@
-#include <tdf/tactile/height_map.h>
-
 #include <tdf/core/error.h>
+#include <tdf/tactile/height_map.h>
 
 #include <cmath>
 #include <cstdlib>

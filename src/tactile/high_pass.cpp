@@ -1,13 +1,12 @@
-#include <tdf/tactile/high_pass.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
-
-#include "fftw_plan_impl.h"
+#include <tdf/tactile/high_pass.h>
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
+
+#include "fftw_plan_impl.h"
 
 namespace tdf {
 
@@ -71,13 +70,15 @@ Image high_pass_fft_block(const Image& height, int threshold) {
 Image high_pass_gaussian(const Image& height, float cutoff_mm, float mm_per_pixel) {
     TDF_CHECK_EQ(height.channels(), 1);
     if (!(cutoff_mm > 0) || !(mm_per_pixel > 0))
-        throw_error("Gaussian high-pass needs a positive cut-off and pixel size, got {} mm and {} mm/px", cutoff_mm,
+        throw_error("Gaussian high-pass needs a positive cut-off and pixel size, got {} mm and {} mm/px",
+                    cutoff_mm,
                     mm_per_pixel);
     const float sigma = 0.18739f * cutoff_mm / mm_per_pixel;  // sqrt(ln 2 / pi) / sqrt(2 pi)
     const int radius = std::max(1, int(std::ceil(3.0f * sigma)));
     std::vector<float> kernel(std::size_t(2 * radius + 1));
     float total = 0;
-    for (int i = -radius; i <= radius; ++i) total += kernel[std::size_t(i + radius)] = std::exp(-0.5f * float(i * i) / (sigma * sigma));
+    for (int i = -radius; i <= radius; ++i)
+        total += kernel[std::size_t(i + radius)] = std::exp(-0.5f * float(i * i) / (sigma * sigma));
     for (float& k : kernel) k /= total;
     const int w = height.width(), h = height.height();
     Image rows(w, h, 1), blurred(w, h, 1);
@@ -85,7 +86,8 @@ Image high_pass_gaussian(const Image& height, float cutoff_mm, float mm_per_pixe
         for (int y = int(y0); y < int(y1); ++y)
             for (int x = 0; x < w; ++x) {
                 float sum = 0;
-                for (int i = -radius; i <= radius; ++i) sum += kernel[std::size_t(i + radius)] * height.at(reflect101(x + i, w), y, 0);
+                for (int i = -radius; i <= radius; ++i)
+                    sum += kernel[std::size_t(i + radius)] * height.at(reflect101(x + i, w), y, 0);
                 rows.at(x, y, 0) = sum;
             }
     });
@@ -93,7 +95,8 @@ Image high_pass_gaussian(const Image& height, float cutoff_mm, float mm_per_pixe
         for (int y = int(y0); y < int(y1); ++y)
             for (int x = 0; x < w; ++x) {
                 float sum = 0;
-                for (int i = -radius; i <= radius; ++i) sum += kernel[std::size_t(i + radius)] * rows.at(x, reflect101(y + i, h), 0);
+                for (int i = -radius; i <= radius; ++i)
+                    sum += kernel[std::size_t(i + radius)] * rows.at(x, reflect101(y + i, h), 0);
                 blurred.at(x, y, 0) = height.at(x, y, 0) - sum;
             }
     });
@@ -104,7 +107,9 @@ Image high_pass_gaussian(const Image& height, float cutoff_mm, float mm_per_pixe
 Image bilateral_filter(const Image& image, int diameter, float sigma_color, float sigma_space) {
     TDF_CHECK_EQ(image.channels(), 1);
     if (diameter < 1 || !(sigma_color > 0) || !(sigma_space > 0))
-        throw_error("bilateral filter: diameter {} and sigmas {}, {} must be positive", diameter, sigma_color,
+        throw_error("bilateral filter: diameter {} and sigmas {}, {} must be positive",
+                    diameter,
+                    sigma_color,
                     sigma_space);
     const int radius = diameter / 2;
     struct Tap {

@@ -1,7 +1,6 @@
-#include <tdf/tactile/normal_map.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/poisson.h>
 
 #include <algorithm>
@@ -27,7 +26,8 @@ Image normals_from_height(const Image& height, float gain) {
             for (int x = 0; x < w; ++x) {
                 const int c = std::clamp(x, 1, w - 2);
                 const float gx = -gain * (height.at(c + 1, r, 0) - height.at(c - 1, r, 0)) * 0.5f;
-                const float gy = gain * (height.at(c, r + 1, 0) - height.at(c, r - 1, 0)) * 0.5f;  // row r-1 is up
+                const float gy =
+                    gain * (height.at(c, r + 1, 0) - height.at(c, r - 1, 0)) * 0.5f;  // row r-1 is up
                 const float inv = 1.0f / std::sqrt(gx * gx + gy * gy + 1.0f);
                 float* n = normals.pixel(x, y);
                 n[0] = gx * inv;

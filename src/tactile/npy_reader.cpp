@@ -1,8 +1,6 @@
-#include <tdf/tactile/npy_reader.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
-
+#include <tdf/tactile/npy_reader.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -50,7 +48,8 @@ std::vector<std::size_t> parse_shape(const std::string& text, const std::string&
     while (i < text.size()) {
         while (i < text.size() && (text[i] == ' ' || text[i] == ',')) ++i;
         if (i >= text.size() || text[i] == ')') break;
-        if (!std::isdigit(static_cast<unsigned char>(text[i]))) throw_error("{}: malformed npy shape {}", where, text);
+        if (!std::isdigit(static_cast<unsigned char>(text[i])))
+            throw_error("{}: malformed npy shape {}", where, text);
         std::size_t value = 0;
         while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) {
             value = value * 10 + std::size_t(text[i] - '0');
@@ -106,18 +105,30 @@ bool convert_values(char kind, int size, bool swap, const unsigned char* in, std
     for (std::size_t i = 0; i < count; ++i) {
         const unsigned char* p = in + i * std::size_t(size);
         double v;
-        if (kind == 'f' && size == 8) v = load_swapped<double>(p, swap);
-        else if (kind == 'f' && size == 4) v = load_swapped<float>(p, swap);
-        else if (kind == 'f' && size == 2) v = half_to_float(load_swapped<std::uint16_t>(p, swap));
-        else if (kind == 'i' && size == 1) v = double(static_cast<std::int8_t>(p[0]));
-        else if (kind == 'i' && size == 2) v = load_swapped<std::int16_t>(p, swap);
-        else if (kind == 'i' && size == 4) v = load_swapped<std::int32_t>(p, swap);
-        else if (kind == 'i' && size == 8) v = double(load_swapped<std::int64_t>(p, swap));
-        else if ((kind == 'u' || kind == 'b') && size == 1) v = p[0];
-        else if (kind == 'u' && size == 2) v = load_swapped<std::uint16_t>(p, swap);
-        else if (kind == 'u' && size == 4) v = load_swapped<std::uint32_t>(p, swap);
-        else if (kind == 'u' && size == 8) v = double(load_swapped<std::uint64_t>(p, swap));
-        else return false;
+        if (kind == 'f' && size == 8)
+            v = load_swapped<double>(p, swap);
+        else if (kind == 'f' && size == 4)
+            v = load_swapped<float>(p, swap);
+        else if (kind == 'f' && size == 2)
+            v = half_to_float(load_swapped<std::uint16_t>(p, swap));
+        else if (kind == 'i' && size == 1)
+            v = double(static_cast<std::int8_t>(p[0]));
+        else if (kind == 'i' && size == 2)
+            v = load_swapped<std::int16_t>(p, swap);
+        else if (kind == 'i' && size == 4)
+            v = load_swapped<std::int32_t>(p, swap);
+        else if (kind == 'i' && size == 8)
+            v = double(load_swapped<std::int64_t>(p, swap));
+        else if ((kind == 'u' || kind == 'b') && size == 1)
+            v = p[0];
+        else if (kind == 'u' && size == 2)
+            v = load_swapped<std::uint16_t>(p, swap);
+        else if (kind == 'u' && size == 4)
+            v = load_swapped<std::uint32_t>(p, swap);
+        else if (kind == 'u' && size == 8)
+            v = double(load_swapped<std::uint64_t>(p, swap));
+        else
+            return false;
         out[i] = v;
     }
     return true;
@@ -210,18 +221,23 @@ NpyArray parse_npy(const std::string& bytes, const std::string& where) {
     const std::size_t data_start = header_start + header_length;
     if (size <= 0 || size > 8) throw_error("{}: unsupported dtype '{}'", where, d);
     if ((bytes.size() - data_start) / std::size_t(size) < count)
-        throw_error("{}: truncated data ({} bytes for {} values of '{}')", where, bytes.size() - data_start,
-                    count, d);
-    if (!convert_values(kind, size, swap, reinterpret_cast<const unsigned char*>(bytes.data() + data_start), count,
+        throw_error("{}: truncated data ({} bytes for {} values of '{}')",
+                    where,
+                    bytes.size() - data_start,
+                    count,
+                    d);
+    if (!convert_values(kind,
+                        size,
+                        swap,
+                        reinterpret_cast<const unsigned char*>(bytes.data() + data_start),
+                        count,
                         array.values))
         throw_error("{}: unsupported dtype '{}' (expected float, integer or bool)", where, d);
     if (fortran && array.shape.size() > 1) array.values = fortran_to_c(array.values, array.shape);
     return array;
 }
 
-NpyArray read_npy(const std::string& path) {
-    return parse_npy(read_text_file(path), path);
-}
+NpyArray read_npy(const std::string& path) { return parse_npy(read_text_file(path), path); }
 
 std::map<std::string, NpyArray> read_npz(const std::string& path) {
     if (!std::filesystem::exists(path)) throw_error("cannot open '{}': no such file", path);
@@ -251,7 +267,8 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
     std::map<std::string, NpyArray> arrays;
     std::size_t at = std::size_t(directory);
     for (std::uint64_t e = 0; e < entries; ++e) {
-        if (at + 46 > zip.size() || u32(zip, at) != 0x02014b50u) throw_error("{}: corrupt zip directory", path);
+        if (at + 46 > zip.size() || u32(zip, at) != 0x02014b50u)
+            throw_error("{}: corrupt zip directory", path);
         const std::uint16_t method = u16(zip, at + 10);
         std::uint64_t compressed = u32(zip, at + 20), uncompressed = u32(zip, at + 24);
         const std::size_t name_length = u16(zip, at + 28), extra_length = u16(zip, at + 30),
@@ -275,7 +292,8 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
         const std::string where = path + ": " + name;
         if (local + 30 > zip.size() || u32(zip, std::size_t(local)) != 0x04034b50u)
             throw_error("{}: corrupt zip entry (truncated archive?)", where);
-        const std::uint64_t data = local + 30 + u16(zip, std::size_t(local) + 26) + u16(zip, std::size_t(local) + 28);
+        const std::uint64_t data =
+            local + 30 + u16(zip, std::size_t(local) + 26) + u16(zip, std::size_t(local) + 28);
         if (data + compressed > zip.size()) throw_error("{}: member data is truncated", where);
         std::string member = zip.substr(std::size_t(data), std::size_t(compressed));
         if (method == 8) {

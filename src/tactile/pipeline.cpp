@@ -1,10 +1,9 @@
-#include <tdf/tactile/pipeline.h>
-
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
 #include <tdf/tactile/contact_mask.h>
 #include <tdf/tactile/high_pass.h>
 #include <tdf/tactile/normal_map.h>
+#include <tdf/tactile/pipeline.h>
 #include <tdf/tactile/resample.h>
 
 #include <algorithm>
@@ -26,14 +25,22 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
     const std::string& what = raw.source;
     Image filtered;
     switch (options.high_pass) {
-        case HighPass::FftBlock: filtered = high_pass_fft_block(raw.height, options.freq_threshold); break;
-        case HighPass::Gaussian: filtered = high_pass_gaussian(raw.height, options.cutoff_mm, raw.mm_per_pixel); break;
-        case HighPass::None: filtered = raw.height; break;
+        case HighPass::FftBlock:
+            filtered = high_pass_fft_block(raw.height, options.freq_threshold);
+            break;
+        case HighPass::Gaussian:
+            filtered = high_pass_gaussian(raw.height, options.cutoff_mm, raw.mm_per_pixel);
+            break;
+        case HighPass::None:
+            filtered = raw.height;
+            break;
     }
-    Image smoothed = options.smooth ? bilateral_filter(filtered, options.bilateral_diameter, options.sigma_color,
-                                                       options.sigma_space)
-                                    : filtered;
-    const bool contact = options.contact == ContactCrop::On || (options.contact == ContactCrop::Auto && input.capture);
+    Image smoothed =
+        options.smooth
+            ? bilateral_filter(filtered, options.bilateral_diameter, options.sigma_color, options.sigma_space)
+            : filtered;
+    const bool contact =
+        options.contact == ContactCrop::On || (options.contact == ContactCrop::Auto && input.capture);
     int x = 0, y = 0, side = 0;
     Image mask;
     if (contact) {
@@ -49,7 +56,8 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
     // Matches reference: the amplitude `scale` is the crop's range before resampling (spec 6.2 step 6).
     const auto [lo, hi] = value_range(patch);
     if (!(hi - lo > 1e-6f))
-        throw_error("{}: the patch is flat (height range {} mm); nothing to turn into a texture", what, hi - lo);
+        throw_error(
+            "{}: the patch is flat (height range {} mm); nothing to turn into a texture", what, hi - lo);
     for (float& v : patch.values()) v -= lo;
     HeightMap out;
     out.source = raw.source;
@@ -72,7 +80,8 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
     return out;
 }
 
-HeightMap quilt_height_maps(const std::vector<HeightMap>& patches, const QuiltOptions& options, QuiltStats* stats) {
+HeightMap quilt_height_maps(const std::vector<HeightMap>& patches, const QuiltOptions& options,
+                            QuiltStats* stats) {
     if (patches.empty()) throw_error("quilting: no patch given");
     std::vector<Image> images;
     std::vector<std::string> names;
@@ -83,8 +92,11 @@ HeightMap quilt_height_maps(const std::vector<HeightMap>& patches, const QuiltOp
         if (p.height.channels() != 1) throw_error("{}: expected a 1-channel height map", p.source);
         if (out.mm_per_pixel > 0 && p.mm_per_pixel > 0 &&
             std::fabs(p.mm_per_pixel - out.mm_per_pixel) > 0.01f * out.mm_per_pixel)
-            throw_error("{}: {} mm per pixel, but {} has {}; resample the patches to one scale first", p.source,
-                        p.mm_per_pixel, patches[0].source, out.mm_per_pixel);
+            throw_error("{}: {} mm per pixel, but {} has {}; resample the patches to one scale first",
+                        p.source,
+                        p.mm_per_pixel,
+                        patches[0].source,
+                        out.mm_per_pixel);
         images.push_back(p.height);
         names.push_back(p.source);
         out.reference_scale_mm = std::max(out.reference_scale_mm, p.reference_scale_mm);
@@ -115,8 +127,8 @@ Image normal_map_from_height(const HeightMap& map, Amplitude amplitude, float st
     return normals_from_height(map.height, gain * strength);
 }
 
-void write_normal_map(const std::string& path, const Image& normals, float mm_per_pixel, const std::string& source,
-                      int bits) {
+void write_normal_map(const std::string& path, const Image& normals, float mm_per_pixel,
+                      const std::string& source, int bits) {
     HeightMap info;
     info.mm_per_pixel = mm_per_pixel;
     info.source = source;

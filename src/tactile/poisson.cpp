@@ -1,19 +1,24 @@
-#include <tdf/tactile/poisson.h>
-
 #include <tdf/core/error.h>
-
-#include "fftw_plan_impl.h"
+#include <tdf/tactile/poisson.h>
 
 #include <algorithm>
 #include <cmath>
+
+#include "fftw_plan_impl.h"
 
 namespace tdf {
 
 Image integrate_gradients(const Image& gx, const Image& gy, const std::string& what) {
     const int w = gx.width(), h = gx.height();
     if (gx.channels() != 1 || gy.channels() != 1 || gy.width() != w || gy.height() != h)
-        throw_error("{}: gx and gy must be 1-channel images of equal size ({}x{}x{} vs {}x{}x{})", what, w, h,
-                    gx.channels(), gy.width(), gy.height(), gy.channels());
+        throw_error("{}: gx and gy must be 1-channel images of equal size ({}x{}x{} vs {}x{}x{})",
+                    what,
+                    w,
+                    h,
+                    gx.channels(),
+                    gy.width(),
+                    gy.height(),
+                    gy.channels());
     if (w < 2 || h < 2) throw_error("{}: gradients must be at least 2x2, got {}x{}", what, w, h);
     if (!gx.all_finite() || !gy.all_finite()) throw_error("{}: gradients contain NaN or infinity", what);
 

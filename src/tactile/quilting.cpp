@@ -1,10 +1,7 @@
-#include <tdf/tactile/quilting.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
-
-#include "fftw_plan_impl.h"
+#include <tdf/tactile/quilting.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +9,8 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+
+#include "fftw_plan_impl.h"
 
 namespace tdf {
 
@@ -83,8 +82,8 @@ struct Scratch {
     std::vector<std::vector<double>> errors;  // per exemplar, per candidate
     std::vector<float> pixel_error;           // B x B, new vs placed
     std::vector<double> path_cost;
-    std::vector<std::uint8_t> keep_old;       // B x B
-    std::vector<float> strip_cost;            // B x O, one side's cost along its seam
+    std::vector<std::uint8_t> keep_old;  // B x B
+    std::vector<float> strip_cost;       // B x O, one side's cost along its seam
     std::vector<int> seam;
 };
 
@@ -121,9 +120,12 @@ void min_cut_path(const float* cost, int rows, int cols, std::vector<double>& to
     for (int r = 1; r < rows; ++r)
         for (int c = 0; c < cols; ++c) {
             double best = total[std::size_t(r - 1) * std::size_t(cols) + std::size_t(c)];
-            if (c > 0) best = std::min(best, total[std::size_t(r - 1) * std::size_t(cols) + std::size_t(c - 1)]);
-            if (c + 1 < cols) best = std::min(best, total[std::size_t(r - 1) * std::size_t(cols) + std::size_t(c + 1)]);
-            total[std::size_t(r) * std::size_t(cols) + std::size_t(c)] = best + cost[std::size_t(r) * std::size_t(cols) + std::size_t(c)];
+            if (c > 0)
+                best = std::min(best, total[std::size_t(r - 1) * std::size_t(cols) + std::size_t(c - 1)]);
+            if (c + 1 < cols)
+                best = std::min(best, total[std::size_t(r - 1) * std::size_t(cols) + std::size_t(c + 1)]);
+            total[std::size_t(r) * std::size_t(cols) + std::size_t(c)] =
+                best + cost[std::size_t(r) * std::size_t(cols) + std::size_t(c)];
         }
     seam.resize(std::size_t(rows));
     const double* last = &total[std::size_t(rows - 1) * std::size_t(cols)];
@@ -143,15 +145,17 @@ void min_cut_path(const float* cost, int rows, int cols, std::vector<double>& to
 
 class Quilter {
 public:
-    Quilter(const std::vector<Image>& images, const QuiltOptions& options, const std::vector<std::string>& names);
+    Quilter(const std::vector<Image>& images, const QuiltOptions& options,
+            const std::vector<std::string>& names);
     QuiltResult run();
 
 private:
     void prepare_exemplar(Exemplar& e, const Image& image);
     void place_block(int row, int col, Scratch& s, double& cut_error, double& random_error);
-    void search(int row, int col, unsigned sides, Scratch& s, int& chosen_exemplar, int& chosen_x, int& chosen_y,
-                double& random_error);
-    void paste(int row, int col, unsigned sides, const Exemplar& e, int ex, int ey, Scratch& s, double& cut_error);
+    void search(int row, int col, unsigned sides, Scratch& s, int& chosen_exemplar, int& chosen_x,
+                int& chosen_y, double& random_error);
+    void paste(int row, int col, unsigned sides, const Exemplar& e, int ex, int ey, Scratch& s,
+               double& cut_error);
 
     QuiltOptions m_options;
     Grid m_grid;
@@ -163,14 +167,16 @@ private:
     int m_channels = 0;
 };
 
-Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options, const std::vector<std::string>& names)
+Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options,
+                 const std::vector<std::string>& names)
     : m_options(options) {
     auto name = [&](std::size_t i) { return i < names.size() ? names[i] : fmt::format("exemplar {}", i); };
     if (images.empty()) throw_error("quilting: no exemplar patch given");
     if (options.block < 4) throw_error("quilting: --block must be at least 4 pixels, got {}", options.block);
     if (!(options.overlap > 0.0f && options.overlap <= 0.5f))
         throw_error("quilting: --overlap must be in (0, 0.5], got {}", options.overlap);
-    if (!(options.tolerance >= 0.0f)) throw_error("quilting: --tolerance must be >= 0, got {}", options.tolerance);
+    if (!(options.tolerance >= 0.0f))
+        throw_error("quilting: --tolerance must be >= 0, got {}", options.tolerance);
     if (options.size < options.block)
         throw_error("quilting: --size {} is smaller than the block {}", options.size, options.block);
     m_grid.block = options.block;
@@ -188,10 +194,14 @@ Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options, 
     for (std::size_t i = 0; i < images.size(); ++i) {
         const Image& image = images[i];
         if (image.channels() != m_channels)
-            throw_error("{}: {} channels, but the first exemplar has {}", name(i), image.channels(), m_channels);
+            throw_error(
+                "{}: {} channels, but the first exemplar has {}", name(i), image.channels(), m_channels);
         if (image.width() < options.block || image.height() < options.block)
-            throw_error("{}: the patch ({}x{}) is smaller than the block size {}", name(i), image.width(),
-                        image.height(), options.block);
+            throw_error("{}: the patch ({}x{}) is smaller than the block size {}",
+                        name(i),
+                        image.width(),
+                        image.height(),
+                        options.block);
         if (!image.all_finite()) throw_error("{}: the patch contains NaN or infinite values", name(i));
     }
     for (unsigned sides = 0; sides < kSideTypes; ++sides) {
@@ -217,14 +227,16 @@ void Quilter::prepare_exemplar(Exemplar& e, const Image& image) {
     e.inverse = fftw::plan_c2r(e.width, e.height, product.get(), real.get());
 
     for (int c = 0; c < e.channels; ++c) {
-        for (std::size_t p = 0; p < pixels; ++p) real[p] = image.data()[p * std::size_t(e.channels) + std::size_t(c)];
+        for (std::size_t p = 0; p < pixels; ++p)
+            real[p] = image.data()[p * std::size_t(e.channels) + std::size_t(c)];
         e.spectra.push_back(fftw::alloc_complex(e.spectrum_size()));
         fftw_execute_dft_r2c(e.forward.get(), real.get(), e.spectra.back().get());
     }
     for (std::size_t p = 0; p < pixels; ++p) {
         double sum = 0;
-        for (int c = 0; c < e.channels; ++c) sum += double(image.data()[p * std::size_t(e.channels) + std::size_t(c)]) *
-                                                    image.data()[p * std::size_t(e.channels) + std::size_t(c)];
+        for (int c = 0; c < e.channels; ++c)
+            sum += double(image.data()[p * std::size_t(e.channels) + std::size_t(c)]) *
+                   image.data()[p * std::size_t(e.channels) + std::size_t(c)];
         real[p] = sum;
     }
     fftw_execute_dft_r2c(e.forward.get(), real.get(), energy_spectrum.get());
@@ -275,7 +287,8 @@ void Quilter::search(int row, int col, unsigned sides, Scratch& s, int& chosen_e
             if (!mask[std::size_t(y) * std::size_t(b) + std::size_t(x)]) continue;
             const int cx = m_grid.at(ox, x), cy = m_grid.at(oy, y);
             TDF_CHECK(m_filled[std::size_t(cy) * std::size_t(m_grid.canvas) + std::size_t(cx)]);
-            for (int c = 0; c < m_channels; ++c) template_energy += double(m_canvas.at(cx, cy, c)) * m_canvas.at(cx, cy, c);
+            for (int c = 0; c < m_channels; ++c)
+                template_energy += double(m_canvas.at(cx, cy, c)) * m_canvas.at(cx, cy, c);
         }
 
     double minimum = std::numeric_limits<double>::infinity();
@@ -313,7 +326,8 @@ void Quilter::search(int row, int col, unsigned sides, Scratch& s, int& chosen_e
         for (int y = 0; y < e.positions_y; ++y)
             for (int x = 0; x < e.positions_x; ++x) {
                 const std::size_t k = std::size_t(y) * std::size_t(e.positions_x) + std::size_t(x);
-                const double ssd = energy[k] + scale * s.real[std::size_t(y) * std::size_t(e.width) + std::size_t(x)] +
+                const double ssd = energy[k] +
+                                   scale * s.real[std::size_t(y) * std::size_t(e.width) + std::size_t(x)] +
                                    template_energy;
                 const double error = std::max(ssd, 0.0) / count;
                 errors[k] = error;
@@ -360,7 +374,8 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
             float d2 = 0;
             if (m_masks[sides][std::size_t(y) * std::size_t(b) + std::size_t(x)])
                 for (int c = 0; c < m_channels; ++c) {
-                    const float d = source.at(ex + x, ey + y, c) - m_canvas.at(m_grid.at(ox, x), m_grid.at(oy, y), c);
+                    const float d =
+                        source.at(ex + x, ey + y, c) - m_canvas.at(m_grid.at(ox, x), m_grid.at(oy, y), c);
                     d2 += d * d;
                 }
             s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)] = d2 / float(m_channels);
@@ -379,7 +394,8 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
         for (int r = 0; r < b; ++r)
             for (int k = 0; k < o; ++k) {
                 const int x = vertical ? offset + k : r, y = vertical ? r : offset + k;
-                cost[std::size_t(r) * std::size_t(o) + std::size_t(k)] = s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)];
+                cost[std::size_t(r) * std::size_t(o) + std::size_t(k)] =
+                    s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)];
             }
         min_cut_path(cost.data(), b, o, s.path_cost, s.seam);
         for (int r = 0; r < b; ++r) {
@@ -441,7 +457,8 @@ QuiltResult Quilter::run() {
     for (int i = 0; i < n * n; ++i) by_level[std::size_t(level[std::size_t(i)])].push_back(i);
 
     std::size_t largest = 0;
-    for (const Exemplar& e : m_exemplars) largest = std::max(largest, std::size_t(e.width) * std::size_t(e.height));
+    for (const Exemplar& e : m_exemplars)
+        largest = std::max(largest, std::size_t(e.width) * std::size_t(e.height));
     ScratchPool pool([&] {
         auto s = std::make_unique<Scratch>();
         s->real = fftw::alloc_real(largest);
@@ -479,7 +496,8 @@ QuiltResult Quilter::run() {
     result.image = side == m_grid.canvas ? std::move(m_canvas) : Image(side, side, m_channels);
     if (result.image.width() != m_grid.canvas)
         for (int y = 0; y < side; ++y)
-            std::copy(m_canvas.pixel(0, y), m_canvas.pixel(0, y) + std::size_t(side) * std::size_t(m_channels),
+            std::copy(m_canvas.pixel(0, y),
+                      m_canvas.pixel(0, y) + std::size_t(side) * std::size_t(m_channels),
                       result.image.pixel(0, y));
     return result;
 }

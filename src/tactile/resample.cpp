@@ -1,7 +1,6 @@
-#include <tdf/tactile/resample.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/tactile/resample.h>
 
 #include <algorithm>
 #include <cmath>
@@ -22,8 +21,8 @@ double lanczos(double x) {
 
 // Sparse 1-D resampling matrix from `in` samples to `out` samples.
 struct Taps {
-    std::vector<int> index;       // clamped source indices, out * taps
-    std::vector<float> weight;    // normalised weights, out * taps
+    std::vector<int> index;     // clamped source indices, out * taps
+    std::vector<float> weight;  // normalised weights, out * taps
     int taps = 0;
 };
 
@@ -44,7 +43,8 @@ Taps make_taps(int in, int out) {
             t.weight[std::size_t(o) * std::size_t(t.taps) + std::size_t(k)] = float(w);
             total += w;
         }
-        for (int k = 0; k < t.taps; ++k) t.weight[std::size_t(o) * std::size_t(t.taps) + std::size_t(k)] /= float(total);
+        for (int k = 0; k < t.taps; ++k)
+            t.weight[std::size_t(o) * std::size_t(t.taps) + std::size_t(k)] /= float(total);
     }
     return t;
 }
@@ -57,42 +57,44 @@ Image crop(const Image& image, int x, int y, int width, int height) {
     const int c = image.channels();
     Image out(width, height, c);
     for (int row = 0; row < height; ++row)
-        std::copy(image.pixel(x, y + row), image.pixel(x, y + row) + std::size_t(width) * std::size_t(c),
+        std::copy(image.pixel(x, y + row),
+                  image.pixel(x, y + row) + std::size_t(width) * std::size_t(c),
                   out.pixel(0, row));
     return out;
 }
 
-Image resize_lanczos(const Image& image, int width, int height) {
-    TDF_CHECK(width > 0 && height > 0 && !image.empty());
-    if (width == image.width() && height == image.height()) return image;
+namespace {
+
+// Resamples along x (`horizontal`) or y with precomputed taps; the other axis is unchanged.
+Image resample_axis(const Image& image, const Taps& taps, int out_size, bool horizontal) {
     const int c = image.channels();
-    const Taps tx = make_taps(image.width(), width), ty = make_taps(image.height(), height);
-    Image horizontal(width, image.height(), c), out(width, height, c);
-    parallel_for(std::size_t(image.height()), 16, [&](std::size_t y0, std::size_t y1) {
-        for (int y = int(y0); y < int(y1); ++y)
-            for (int x = 0; x < width; ++x)
-                for (int k = 0; k < c; ++k) {
-                    float sum = 0;
-                    for (int t = 0; t < tx.taps; ++t) {
-                        const std::size_t i = std::size_t(x) * std::size_t(tx.taps) + std::size_t(t);
-                        sum += tx.weight[i] * image.at(tx.index[i], y, k);
-                    }
-                    horizontal.at(x, y, k) = sum;
-                }
-    });
+    const int width = horizontal ? out_size : image.width(), height = horizontal ? image.height() : out_size;
+    Image out(width, height, c);
     parallel_for(std::size_t(height), 16, [&](std::size_t y0, std::size_t y1) {
         for (int y = int(y0); y < int(y1); ++y)
-            for (int x = 0; x < width; ++x)
+            for (int x = 0; x < width; ++x) {
+                const std::size_t first = std::size_t(horizontal ? x : y) * std::size_t(taps.taps);
                 for (int k = 0; k < c; ++k) {
                     float sum = 0;
-                    for (int t = 0; t < ty.taps; ++t) {
-                        const std::size_t i = std::size_t(y) * std::size_t(ty.taps) + std::size_t(t);
-                        sum += ty.weight[i] * horizontal.at(x, ty.index[i], k);
+                    for (int t = 0; t < taps.taps; ++t) {
+                        const int source = taps.index[first + std::size_t(t)];
+                        sum += taps.weight[first + std::size_t(t)] *
+                               (horizontal ? image.at(source, y, k) : image.at(x, source, k));
                     }
                     out.at(x, y, k) = sum;
                 }
+            }
     });
     return out;
+}
+
+}  // namespace
+
+Image resize_lanczos(const Image& image, int width, int height) {
+    TDF_CHECK(width > 0 && height > 0 && !image.empty());
+    if (width == image.width() && height == image.height()) return image;
+    const Image horizontal = resample_axis(image, make_taps(image.width(), width), width, true);
+    return resample_axis(horizontal, make_taps(image.height(), height), height, false);
 }
 
 }  // namespace tdf

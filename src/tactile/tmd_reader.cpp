@@ -1,7 +1,6 @@
-#include <tdf/tactile/tmd_reader.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
+#include <tdf/tactile/tmd_reader.h>
 
 #include <cmath>
 #include <cstdint>
@@ -45,7 +44,8 @@ TmdFile read_tmd(const std::string& path) {
         throw_error("{}: implausible .tmd size {} x {}", path, columns, rows);
     if (!(file.length_x_mm > 0) || !(file.length_y_mm > 0) || !std::isfinite(file.length_x_mm) ||
         !std::isfinite(file.length_y_mm))
-        throw_error("{}: .tmd lengths must be positive, got {} x {} mm", path, file.length_x_mm, file.length_y_mm);
+        throw_error(
+            "{}: .tmd lengths must be positive, got {} x {} mm", path, file.length_x_mm, file.length_y_mm);
     const std::size_t count = std::size_t(columns) * rows;
     if (bytes.size() - at < count * 4)
         throw_error("{}: truncated .tmd data ({} of {} bytes)", path, bytes.size() - at, count * 4);
@@ -57,7 +57,9 @@ TmdFile read_tmd(const std::string& path) {
     file.map.source = path;
     const float mm_per_row = file.length_y_mm / float(rows);
     if (std::fabs(mm_per_row - file.map.mm_per_pixel) > 0.01f * file.map.mm_per_pixel)
-        throw_error("{}: non-square .tmd pixels ({} x {} mm), not supported", path, file.map.mm_per_pixel,
+        throw_error("{}: non-square .tmd pixels ({} x {} mm), not supported",
+                    path,
+                    file.map.mm_per_pixel,
                     mm_per_row);
     return file;
 }

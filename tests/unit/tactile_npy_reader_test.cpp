@@ -1,11 +1,8 @@
+#include <gtest/gtest.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/tactile/height_input.h>
 #include <tdf/tactile/npy_reader.h>
-
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
 #include <zlib.h>
 
 #include <cstdint>
@@ -14,7 +11,11 @@
 #include <fstream>
 #include <limits>
 
+#include "common/test_paths.h"
+#include "unit/tactile_test_util.h"
+
 using namespace tdf;
+using tdf::test::error_of;
 
 namespace {
 
@@ -66,7 +67,8 @@ std::string zip_bytes(const std::vector<std::pair<std::string, std::string>>& me
     std::string zip, directory;
     for (const auto& [name, content] : members) {
         const std::string stored = compress ? deflate_raw(content) : content;
-        const auto crc = std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(content.data()), uInt(content.size())));
+        const auto crc =
+            std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(content.data()), uInt(content.size())));
         const std::uint32_t offset = std::uint32_t(zip.size());
         auto common = [&](std::string& s) {
             put16(s, 20), put16(s, 0), put16(s, compress ? 8 : 0), put16(s, 0), put16(s, 0x21);
@@ -79,13 +81,15 @@ std::string zip_bytes(const std::vector<std::pair<std::string, std::string>>& me
         put32(directory, 0x02014b50u);
         put16(directory, 20);
         common(directory);
-        put16(directory, 0), put16(directory, 0), put16(directory, 0), put32(directory, 0), put32(directory, offset);
+        put16(directory, 0), put16(directory, 0), put16(directory, 0), put32(directory, 0),
+            put32(directory, offset);
         directory += name;
     }
     const std::uint32_t start = std::uint32_t(zip.size());
     zip += directory;
     put32(zip, 0x06054b50u);
-    put16(zip, 0), put16(zip, 0), put16(zip, std::uint16_t(members.size())), put16(zip, std::uint16_t(members.size()));
+    put16(zip, 0), put16(zip, 0), put16(zip, std::uint16_t(members.size())),
+        put16(zip, std::uint16_t(members.size()));
     put32(zip, std::uint32_t(directory.size())), put32(zip, start), put16(zip, 0);
     return zip;
 }
@@ -94,17 +98,6 @@ std::string write_file(const std::string& name, const std::string& bytes) {
     const std::string path = test::scratch_dir() + "/" + name;
     std::ofstream(path, std::ios::binary) << bytes;
     return path;
-}
-
-// The error message of `f`, or "" when it does not throw tdf::Error.
-template <typename F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "";
 }
 
 const std::string kStrawberry = "tactile/gelsight_raw/strawberry_00000_gxgy.npz";
@@ -118,11 +111,13 @@ TEST(NpyReader, ReadsDtypesAndFortranOrder) {
     // Fortran order: memory holds columns; values come back row-major.
     const NpyArray f4 = parse_npy(npy_bytes("<f4", "(2, 3)", raw<float>({1, 4, 2, 5, 3, 6}), true), "f4");
     EXPECT_EQ(f4.values, (std::vector<double>{1, 2, 3, 4, 5, 6}));
-    const NpyArray u1 = parse_npy(npy_bytes("|u1", "(1, 2, 3)", raw<std::uint8_t>({0, 1, 2, 253, 254, 255})), "u1");
+    const NpyArray u1 =
+        parse_npy(npy_bytes("|u1", "(1, 2, 3)", raw<std::uint8_t>({0, 1, 2, 253, 254, 255})), "u1");
     EXPECT_EQ(u1.at(0, 1, 2), 255.0);
     const NpyArray i2 = parse_npy(npy_bytes(">i2", "(2,)", std::string("\xff\xfe\x01\x00", 4)), "i2");
     EXPECT_EQ(i2.values, (std::vector<double>{-2, 256}));
-    const NpyArray f2 = parse_npy(npy_bytes("<f2", "(3,)", raw<std::uint16_t>({0x3c00, 0xc000, 0x0001})), "f2");
+    const NpyArray f2 =
+        parse_npy(npy_bytes("<f2", "(3,)", raw<std::uint16_t>({0x3c00, 0xc000, 0x0001})), "f2");
     EXPECT_EQ(f2.values[0], 1.0);
     EXPECT_EQ(f2.values[1], -2.0);
     EXPECT_NEAR(f2.values[2], 5.96e-8, 1e-10);  // smallest subnormal half
@@ -150,12 +145,14 @@ TEST(NpyReader, BadInputsNameTheFile) {
     const std::string truncated = write_file("truncated.npz", good.substr(0, good.size() / 2));
     EXPECT_NE(error_of([&] { read_npz(truncated); }).find(truncated), std::string::npos);
 
-    const std::string text = write_file("text.npz", zip_bytes({{"dm.npy", npy_bytes("<U4", "(2,)", std::string(32, 'a'))}}, false));
+    const std::string text = write_file(
+        "text.npz", zip_bytes({{"dm.npy", npy_bytes("<U4", "(2,)", std::string(32, 'a'))}}, false));
     const std::string message = error_of([&] { load_height_input(text); });
     EXPECT_NE(message.find(text), std::string::npos) << message;
     EXPECT_NE(message.find("dtype"), std::string::npos) << message;
 
-    const std::string ints = write_file("ints.npz", zip_bytes({{"dm.npy", npy_bytes("<i4", "(4, 4)", std::string(64, '\0'))}}, false));
+    const std::string ints = write_file(
+        "ints.npz", zip_bytes({{"dm.npy", npy_bytes("<i4", "(4, 4)", std::string(64, '\0'))}}, false));
     EXPECT_NE(error_of([&] { load_height_input(ints); }).find("expected a float array"), std::string::npos);
 
     const std::string missing = write_file("missing.npz", zip_bytes({{"image.npy", dm}}, false));
@@ -164,20 +161,24 @@ TEST(NpyReader, BadInputsNameTheFile) {
 
     std::vector<double> values(16, 1.0);
     values[5] = std::numeric_limits<double>::quiet_NaN();
-    const std::string nan = write_file("nan.npz", zip_bytes({{"dm.npy", npy_bytes("<f8", "(4, 4)", raw(values))}}, false));
+    const std::string nan =
+        write_file("nan.npz", zip_bytes({{"dm.npy", npy_bytes("<f8", "(4, 4)", raw(values))}}, false));
     const std::string nan_message = error_of([&] { load_height_input(nan); });
     EXPECT_NE(nan_message.find(nan), std::string::npos);
     EXPECT_NE(nan_message.find("row 1, column 1"), std::string::npos) << nan_message;
 
     EXPECT_NE(error_of([&] { parse_npy("not an array", "x.npy"); }).find("x.npy"), std::string::npos);
-    EXPECT_NE(error_of([&] { parse_npy(npy_bytes("<f8", "(4, 4)", std::string(8, '\0')), "short.npy"); }).find("truncated"),
+    EXPECT_NE(error_of([&] {
+                  parse_npy(npy_bytes("<f8", "(4, 4)", std::string(8, '\0')), "short.npy");
+              }).find("truncated"),
               std::string::npos);
 }
 
 TEST(NpyReader, ReadsTheStrawberryCapture) {
     TDF_REQUIRE_SHARED_DATA(kStrawberry);
     const auto arrays = read_npz(test::shared_data_dir() + "/" + kStrawberry);
-    for (const char* name : {"dm", "gx", "gy", "dm_zero", "nz_mask", "image"}) ASSERT_TRUE(arrays.count(name)) << name;
+    for (const char* name : {"dm", "gx", "gy", "dm_zero", "nz_mask", "image"})
+        ASSERT_TRUE(arrays.count(name)) << name;
     const NpyArray& dm = arrays.at("dm");
     EXPECT_EQ(dm.dtype, "<f8");
     EXPECT_EQ(dm.shape, (std::vector<std::size_t>{240, 320}));

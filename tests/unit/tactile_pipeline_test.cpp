@@ -1,3 +1,4 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
 #include <tdf/tactile/contact_mask.h>
@@ -9,33 +10,20 @@
 #include <tdf/tactile/resample.h>
 #include <tdf/tactile/tactile_map.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <filesystem>
 
+#include "common/test_paths.h"
+#include "unit/tactile_test_util.h"
+
 using namespace tdf;
+using tdf::test::correlation;
 
 namespace {
 
 const std::string kStrawberry = "tactile/gelsight_raw/strawberry_00000_gxgy.npz";
 const std::string kSamples = "tactile/texture_samples";
 constexpr double kPi = 3.14159265358979323846;
-
-double correlation(const Image& a, const Image& b) {
-    double ma = 0, mb = 0;
-    const std::size_t n = a.values().size();
-    for (std::size_t i = 0; i < n; ++i) ma += a.values()[i], mb += b.values()[i];
-    ma /= double(n), mb /= double(n);
-    double ab = 0, aa = 0, bb = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const double x = a.values()[i] - ma, y = b.values()[i] - mb;
-        ab += x * y, aa += x * x, bb += y * y;
-    }
-    return ab / std::sqrt(aa * bb);
-}
 
 Image wave(int w, int h, double cycles_x, double cycles_y) {
     Image image(w, h, 1);
@@ -57,7 +45,8 @@ TEST(HighPass, FftBlockRemovesLowAndKeepsHighFrequencies) {
     // 3 cycles across lies inside the reference's block [-5, 5); 20 cycles lies outside.
     const Image low = wave(64, 48, 3, 0), high = wave(64, 48, 20, 0);
     Image sum(64, 48, 1);
-    for (std::size_t i = 0; i < sum.values().size(); ++i) sum.values()[i] = low.values()[i] + high.values()[i];
+    for (std::size_t i = 0; i < sum.values().size(); ++i)
+        sum.values()[i] = low.values()[i] + high.values()[i];
     const Image filtered = high_pass_fft_block(sum, 5);
     EXPECT_GT(correlation(filtered, high), 0.9999);
     EXPECT_FLOAT_EQ(*std::min_element(filtered.values().begin(), filtered.values().end()), 0.0f);
@@ -72,7 +61,8 @@ TEST(HighPass, GaussianCutoffIsInMillimetres) {
     const Image fine = wave(160, 160, 32, 0), coarse = wave(160, 160, 2, 0);
     auto range = [](const Image& image) {  // away from the mirrored borders (3 sigma = 12 px)
         float lo = 1e30f, hi = -1e30f;
-        for (int x = 20; x < 140; ++x) lo = std::min(lo, image.at(x, 80, 0)), hi = std::max(hi, image.at(x, 80, 0));
+        for (int x = 20; x < 140; ++x)
+            lo = std::min(lo, image.at(x, 80, 0)), hi = std::max(hi, image.at(x, 80, 0));
         return hi - lo;
     };
     EXPECT_GT(range(high_pass_gaussian(fine, 2.0f, 0.1f)), 1.9f);
@@ -85,7 +75,7 @@ TEST(ContactMask, CropsTheLargestContactSquare) {
     Image height(60, 40, 1, 0.0f);
     for (int y = 10; y < 30; ++y)
         for (int x = 5; x < 45; ++x) height.at(x, y, 0) = 1.0f;  // 40 x 20 contact
-    height.at(55, 35, 0) = 2.0f;                                  // a speck: smaller component
+    height.at(55, 35, 0) = 2.0f;                                 // a speck: smaller component
     const ContactRegion region = find_contact_region(height, 0.5f, "test");
     // Dilated bbox x 3..46, y 8..31 (44 x 24) -> square 24 trimmed symmetrically -> even side 24.
     EXPECT_EQ(region.side, 24);
@@ -196,7 +186,8 @@ TEST(Pipeline, StrawberryGradientsIntegrateToItsDepth) {
     // Measured: gx/gy integrate to the SDK's raw depth `dm_zero` (r = 0.94); `dm` (background
     // removed by the SDK) shares the fine texture only: r = 0.29 after a 2 mm Gaussian high-pass.
     const double raw = correlation(integrated, dm_zero);
-    const double textured = correlation(high_pass_gaussian(integrated, 2.0f, 0.085f), high_pass_gaussian(dm, 2.0f, 0.085f));
+    const double textured =
+        correlation(high_pass_gaussian(integrated, 2.0f, 0.085f), high_pass_gaussian(dm, 2.0f, 0.085f));
     RecordProperty("corr_dm_zero", std::to_string(raw));
     RecordProperty("corr_dm_high_pass_2mm", std::to_string(textured));
     EXPECT_GT(raw, 0.9);

@@ -1,7 +1,6 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/tactile/poisson.h>
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 

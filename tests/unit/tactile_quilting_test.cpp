@@ -1,3 +1,4 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
@@ -5,64 +6,33 @@
 #include <tdf/tactile/pipeline.h>
 #include <tdf/tactile/quilting.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <filesystem>
 
+#include "common/test_paths.h"
+#include "unit/tactile_test_util.h"
+
 using namespace tdf;
+using tdf::test::error_of;
+using tdf::test::synthetic_texture;
 
 namespace {
 
 const std::string kStrawberry = "tactile/gelsight_raw/strawberry_00000_gxgy.npz";
 
-// A stochastic texture with structure at several scales (sums of random oriented waves).
-Image synthetic_texture(int size, std::uint64_t seed, int channels = 1) {
-    Rng rng(seed);
-    Image image(size, size, channels);
-    for (int wave = 0; wave < 12; ++wave) {
-        const float angle = rng.uniform(0.0f, 6.2831853f), frequency = rng.uniform(0.05f, 0.4f);
-        const float phase = rng.uniform(0.0f, 6.2831853f), amplitude = rng.uniform(0.2f, 1.0f);
-        for (int y = 0; y < size; ++y)
-            for (int x = 0; x < size; ++x)
-                for (int c = 0; c < channels; ++c)
-                    image.at(x, y, c) += amplitude * std::sin(frequency * (std::cos(angle) * float(x) +
-                                                                           std::sin(angle) * float(y)) + phase + float(c));
-    }
-    return image;
-}
-
-// Mean squared difference between horizontally adjacent columns x and x+1 (wrapping), over
-// all rows: a seam shows up as a column pair far above the typical one.
-double column_step(const Image& image, int x) {
+// Mean squared difference between neighbouring lines i and i+1 (wrapping around): columns
+// when `columns`, else rows. A seam shows up as a line pair far above the typical one.
+double line_step(const Image& image, bool columns, int i) {
+    const int lines = columns ? image.width() : image.height(),
+              length = columns ? image.height() : image.width();
+    const int next = (i + 1) % lines;
     double sum = 0;
-    const int next = (x + 1) % image.width();
-    for (int y = 0; y < image.height(); ++y) {
-        const double d = double(image.at(next, y, 0)) - image.at(x, y, 0);
+    for (int k = 0; k < length; ++k) {
+        const double d = columns ? double(image.at(next, k, 0)) - image.at(i, k, 0)
+                                 : double(image.at(k, next, 0)) - image.at(k, i, 0);
         sum += d * d;
     }
-    return sum / image.height();
-}
-double row_step(const Image& image, int y) {
-    double sum = 0;
-    const int next = (y + 1) % image.height();
-    for (int x = 0; x < image.width(); ++x) {
-        const double d = double(image.at(x, next, 0)) - image.at(x, y, 0);
-        sum += d * d;
-    }
-    return sum / image.width();
-}
-
-template <typename F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "";
+    return sum / length;
 }
 
 }  // namespace
@@ -110,7 +80,8 @@ TEST(Quilting, OutputSizesAndCopiesExemplarValues) {
         for (int x = 0; x < out.width(); x += 7) {
             bool found = false;
             for (std::size_t p = 0; p < exemplar.pixel_count() && !found; ++p)
-                found = exemplar.data()[3 * p] == out.at(x, y, 0) && exemplar.data()[3 * p + 1] == out.at(x, y, 1);
+                found = exemplar.data()[3 * p] == out.at(x, y, 0) &&
+                        exemplar.data()[3 * p + 1] == out.at(x, y, 1);
             ASSERT_TRUE(found) << x << "," << y;
         }
 }
@@ -139,14 +110,15 @@ TEST(Quilting, TileableOutputHasNoWrapSeam) {
     auto interior = [](const Image& image, bool columns) {
         double sum = 0;
         const int n = (columns ? image.width() : image.height()) - 1;
-        for (int i = 0; i < n; ++i) sum += columns ? column_step(image, i) : row_step(image, i);
+        for (int i = 0; i < n; ++i) sum += line_step(image, columns, i);
         return sum / n;
     };
     for (bool columns : {true, false}) {
-        const double wrap_tiled = columns ? column_step(tiled, tiled.width() - 1) : row_step(tiled, tiled.height() - 1);
-        const double wrap_plain = columns ? column_step(plain, plain.width() - 1) : row_step(plain, plain.height() - 1);
+        const double wrap_tiled = line_step(tiled, columns, (columns ? tiled.width() : tiled.height()) - 1);
+        const double wrap_plain = line_step(plain, columns, (columns ? plain.width() : plain.height()) - 1);
         const double inside = interior(tiled, columns);
-        RecordProperty(columns ? "wrap_columns_ratio" : "wrap_rows_ratio", std::to_string(wrap_tiled / inside));
+        RecordProperty(columns ? "wrap_columns_ratio" : "wrap_rows_ratio",
+                       std::to_string(wrap_tiled / inside));
         EXPECT_LT(wrap_tiled, 2.0 * inside) << (columns ? "columns" : "rows");
         EXPECT_GT(wrap_plain, 4.0 * interior(plain, columns)) << "the criterion cannot see a seam";
     }
@@ -162,7 +134,10 @@ TEST(Quilting, BadInputGivesClearErrors) {
     Image nan = synthetic_texture(64, 6);
     nan.at(5, 5, 0) = std::nanf("");
     EXPECT_NE(error_of([&] { quilt({nan}, options, {"nan.exr"}); }).find("nan.exr"), std::string::npos);
-    EXPECT_NE(error_of([&] { quilt({Image(64, 64, 1), Image(64, 64, 3)}, options); }).find("channels"), std::string::npos);
+    EXPECT_NE(error_of([&] {
+                  quilt({Image(64, 64, 1), Image(64, 64, 3)}, options);
+              }).find("channels"),
+              std::string::npos);
     options.overlap = 0.8f;
     EXPECT_NE(error_of([&] { quilt({Image(64, 64, 1)}, options); }).find("--overlap"), std::string::npos);
     // A constant exemplar is no error: every candidate matches exactly.
@@ -173,7 +148,8 @@ TEST(Quilting, BadInputGivesClearErrors) {
 
 TEST(Quilting, StrawberryPatchQuiltsWithoutVisibleSeams) {
     TDF_REQUIRE_SHARED_DATA(kStrawberry);
-    const HeightMap patch = extract_patch(load_height_input(test::shared_data_dir() + "/" + kStrawberry), PatchOptions{});
+    const HeightMap patch =
+        extract_patch(load_height_input(test::shared_data_dir() + "/" + kStrawberry), PatchOptions{});
     QuiltOptions options;
     options.size = 400;
     options.block = 40;

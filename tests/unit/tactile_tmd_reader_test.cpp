@@ -1,13 +1,12 @@
+#include <gtest/gtest.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/tactile/tmd_reader.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <filesystem>
 #include <fstream>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 

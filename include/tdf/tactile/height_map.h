@@ -13,7 +13,7 @@ namespace tdf {
 constexpr float kGelSightMiniMmPerPixel = 0.085f;
 
 /// Metadata keys written with tactile images (PNG tEXt chunks / EXR string attributes).
-constexpr const char* kMetaMmPerPixel = "tdf:mm_per_pixel";          ///< lateral pixel size, mm
+constexpr const char* kMetaMmPerPixel = "tdf:mm_per_pixel";            ///< lateral pixel size, mm
 constexpr const char* kMetaReferenceScale = "tdf:reference_scale_mm";  ///< spec 6.2 step 6 `scale`
 constexpr const char* kMetaSource = "tdf:source";                      ///< input file of the pipeline
 

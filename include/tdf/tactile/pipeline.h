@@ -26,12 +26,12 @@ enum class ContactCrop {
 /// Step 1 (spec 6.2). Defaults match the reference.
 struct PatchOptions {
     HighPass high_pass = HighPass::FftBlock;
-    int freq_threshold = 5;        ///< FFT block half-size in frequency bins
-    float cutoff_mm = 2.0f;        ///< Gaussian cut-off wavelength
-    bool smooth = true;            ///< bilateral filter after the high-pass
+    int freq_threshold = 5;  ///< FFT block half-size in frequency bins
+    float cutoff_mm = 2.0f;  ///< Gaussian cut-off wavelength
+    bool smooth = true;      ///< bilateral filter after the high-pass
     int bilateral_diameter = 5;
-    float sigma_color = 125.0f;    ///< mm, like the reference's value on heights in mm
-    float sigma_space = 125.0f;    ///< pixels
+    float sigma_color = 125.0f;  ///< mm, like the reference's value on heights in mm
+    float sigma_space = 125.0f;  ///< pixels
     ContactCrop contact = ContactCrop::Auto;
     float depth_threshold = 0.5f;  ///< mm, on the raw (possibly inverted) heights
     int size = 256;                ///< output side in pixels after resampling; 0 = keep the crop
@@ -62,13 +62,14 @@ enum class Amplitude {
 
 /// Step 3: decoded normals (3 channels, OpenGL) of a height map; `strength` multiplies the
 /// slopes on top of the amplitude rule.
-Image normal_map_from_height(const HeightMap& map, Amplitude amplitude = Amplitude::Auto, float strength = 1.0f);
+Image normal_map_from_height(const HeightMap& map, Amplitude amplitude = Amplitude::Auto,
+                             float strength = 1.0f);
 
 /// Writes decoded normals as a PNG (8 or 16 bits, reference encoding, spec 6.4 step 5) or,
 /// for an .exr path, as float decoded normals; `mm_per_pixel` (when > 0) and `source` are
 /// stored as metadata (tdf:mm_per_pixel, tdf:source).
-void write_normal_map(const std::string& path, const Image& normals, float mm_per_pixel, const std::string& source,
-                      int bits = 8);
+void write_normal_map(const std::string& path, const Image& normals, float mm_per_pixel,
+                      const std::string& source, int bits = 8);
 
 /// A height map as a grey PNG scaled to its own range (for step figures).
 void write_height_preview(const std::string& path, const Image& height);

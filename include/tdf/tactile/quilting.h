@@ -40,7 +40,7 @@ struct QuiltOptions {
 
 struct QuiltStats {
     int blocks_per_side = 0;
-    std::uint64_t candidates = 0;     ///< candidate positions evaluated, all blocks
+    std::uint64_t candidates = 0;  ///< candidate positions evaluated, all blocks
     /// Mean per-pixel squared difference (channel mean) between the placed and the new content
     /// along the boundary cuts: what a viewer sees at the seams.
     double mean_cut_error = 0;

@@ -1,6 +1,7 @@
 #pragma once
 /// Tactile normal maps as the optimizer consumes them (spec 1.3).
 #include <tdf/core/image.h>
+#include <tdf/io/image_io.h>
 
 #include <string>
 
@@ -22,5 +23,8 @@ struct TactileMap {
 /// has fewer than 3 channels, non-finite values, or equal R, G and B everywhere without being
 /// constant (a grey height map, not a normal map). A constant map (flat) is accepted.
 TactileMap load_tactile_map(const std::string& path);
+
+/// load_tactile_map on an image already read from `path` (with read_image(path, metadata)).
+TactileMap decode_tactile_map(const Image& image, const ImageMetadata& metadata, const std::string& path);
 
 }  // namespace tdf

@@ -12,9 +12,9 @@
 namespace tdf {
 
 struct TmdFile {
-    HeightMap map;            ///< heights in mm; mm_per_pixel = length_x_mm / columns
-    float length_x_mm = 0;    ///< physical width of the whole map
-    float length_y_mm = 0;    ///< physical height of the whole map
+    HeightMap map;          ///< heights in mm; mm_per_pixel = length_x_mm / columns
+    float length_x_mm = 0;  ///< physical width of the whole map
+    float length_y_mm = 0;  ///< physical height of the whole map
     float offset_x_mm = 0;
     float offset_y_mm = 0;
     std::string comment;
