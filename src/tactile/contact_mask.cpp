@@ -62,7 +62,7 @@ ContactRegion find_contact_region(const Image& height, float depth_threshold, co
     if (!any)
         throw_error(
             "{}: empty contact mask: no pixel is higher than the depth threshold {} mm (try "
-            "--depth-threshold, --invert, or --no-contact-mask)",
+            "--depth-threshold, --invert or --contact off)",
             what,
             depth_threshold);
 
