@@ -67,15 +67,21 @@ struct InputArgs {
     }
 };
 
+Toggle toggle(const std::string& value) {
+    return value == "on" ? Toggle::On : value == "off" ? Toggle::Off : Toggle::Auto;
+}
+
 struct PatchArgs {
     PatchOptions options;
-    std::string filter = "fft", contact = "auto";
-    bool no_smooth = false;
+    std::string filter = "auto", smooth = "auto", contact = "auto";
 
     void add(CLI::App* app) {
-        app->add_option(
-               "--filter", filter, "high-pass: fft (reference block filter), gaussian (cut-off in mm), none")
-            ->check(CLI::IsMember({"fft", "gaussian", "none"}))
+        app->add_option("--filter",
+                        filter,
+                        "high-pass: auto (fft; gaussian at 1/4 of the width for normal-map inputs), fft "
+                        "(reference block filter), "
+                        "gaussian (cut-off in mm), none")
+            ->check(CLI::IsMember({"auto", "fft", "gaussian", "none"}))
             ->capture_default_str();
         app->add_option("--freq-threshold",
                         options.freq_threshold,
@@ -85,7 +91,9 @@ struct PatchArgs {
         app->add_option("--cutoff-mm", options.cutoff_mm, "gaussian filter: cut-off wavelength in mm")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
-        app->add_flag("--no-smooth", no_smooth, "skip the bilateral filter");
+        app->add_option("--smooth", smooth, "bilateral filter: auto (on, off for normal-map inputs), on, off")
+            ->check(CLI::IsMember({"auto", "on", "off"}))
+            ->capture_default_str();
         app->add_option("--bilateral-d", options.bilateral_diameter, "bilateral filter diameter in pixels")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
@@ -111,19 +119,22 @@ struct PatchArgs {
         PatchOptions o = options;
         o.high_pass = filter == "gaussian" ? HighPass::Gaussian
                       : filter == "none"   ? HighPass::None
-                                           : HighPass::FftBlock;
-        o.contact = contact == "on"    ? ContactCrop::On
-                    : contact == "off" ? ContactCrop::Off
-                                       : ContactCrop::Auto;
-        o.smooth = !no_smooth;
+                      : filter == "fft"    ? HighPass::FftBlock
+                                           : HighPass::Auto;
+        o.contact = toggle(contact);
+        o.smooth = toggle(smooth);
         return o;
     }
 };
 
 struct QuiltArgs {
     QuiltOptions options;
-    void add(CLI::App* app, bool tileable_default) {
-        options.tileable = tileable_default;
+    /// `convert` defaults: tileable and min-contrast 0.5 (sensible results for any input);
+    /// `quilt` defaults to the reference's plain algorithm.
+    void add(CLI::App* app, bool convert_defaults) {
+        const bool tileable_default = convert_defaults;
+        options.tileable = convert_defaults;
+        if (convert_defaults) options.min_contrast = 0.5f;
         app->add_option(
                "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride)")
             ->check(CLI::PositiveNumber)
@@ -135,6 +146,12 @@ struct QuiltArgs {
             ->capture_default_str();
         app->add_option(
                "--tolerance", options.tolerance, "accept candidates within (1 + tolerance) x the best error")
+            ->capture_default_str();
+        app->add_option(
+               "--min-contrast",
+               options.min_contrast,
+               "skip candidate blocks with a standard deviation below this fraction of the median (0 = "
+               "reference)")
             ->capture_default_str();
         app->add_option("--seed", options.seed, "random seed")->capture_default_str();
         if (tileable_default)

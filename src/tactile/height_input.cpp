@@ -93,6 +93,7 @@ HeightInput load_image(const std::string& path, const HeightInputOptions& option
         const TactileMap normals = decode_tactile_map(image, metadata, path);
         input.map.height = height_from_normals(normals.normals, 0.1f, path);
         input.kind = "normal map";
+        input.from_normals = true;
         // Integrated heights are in pixel widths; mm need the pixel size (set below).
         input.map.reference_scale_mm = 0;
     }
@@ -126,7 +127,7 @@ HeightInput load_height_input(const std::string& path, const HeightInputOptions&
             path,
             kGelSightMiniMmPerPixel);
     }
-    if (input.kind == "normal map")
+    if (input.from_normals)
         for (float& v : input.map.height.values()) v *= input.map.mm_per_pixel;
     if (options.invert)
         for (float& v : input.map.height.values()) v = -v;

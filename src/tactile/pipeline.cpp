@@ -23,24 +23,33 @@ std::pair<float, float> value_range(const Image& image) {
 HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, PatchSteps* steps) {
     const HeightMap& raw = input.map;
     const std::string& what = raw.source;
+    HighPass high_pass = options.high_pass;
+    float cutoff_mm = options.cutoff_mm;
+    if (high_pass == HighPass::Auto) {
+        high_pass = input.from_normals ? HighPass::Gaussian : HighPass::FftBlock;
+        const int width = std::min(raw.height.width(), raw.height.height());
+        cutoff_mm = 0.25f * float(width) * raw.mm_per_pixel;
+    }
+    const bool smooth =
+        options.smooth == Toggle::On || (options.smooth == Toggle::Auto && !input.from_normals);
+    const bool contact = options.contact == Toggle::On || (options.contact == Toggle::Auto && input.capture);
     Image filtered;
-    switch (options.high_pass) {
+    switch (high_pass) {
         case HighPass::FftBlock:
             filtered = high_pass_fft_block(raw.height, options.freq_threshold);
             break;
         case HighPass::Gaussian:
-            filtered = high_pass_gaussian(raw.height, options.cutoff_mm, raw.mm_per_pixel);
+            filtered = high_pass_gaussian(raw.height, cutoff_mm, raw.mm_per_pixel);
             break;
+        case HighPass::Auto:
         case HighPass::None:
             filtered = raw.height;
             break;
     }
     Image smoothed =
-        options.smooth
+        smooth
             ? bilateral_filter(filtered, options.bilateral_diameter, options.sigma_color, options.sigma_space)
             : filtered;
-    const bool contact =
-        options.contact == ContactCrop::On || (options.contact == ContactCrop::Auto && input.capture);
     int x = 0, y = 0, side = 0;
     Image mask;
     if (contact) {
@@ -63,7 +72,7 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
     out.source = raw.source;
     // Integrated normal maps already have true slopes: the reference's amplitude rule would
     // distort them, so they keep physical amplitude (normal_map_from_height, Amplitude::Auto).
-    if (input.kind != "normal map") out.reference_scale_mm = hi - lo;
+    if (!input.from_normals) out.reference_scale_mm = hi - lo;
     out.mm_per_pixel = raw.mm_per_pixel;
     if (options.size > 0 && options.size != side) {
         patch = resize_lanczos(patch, options.size, options.size);
@@ -74,7 +83,7 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
         steps->raw = raw.height;
         steps->contact_mask = mask;
         steps->high_passed = filtered;
-        steps->smoothed = options.smooth ? smoothed : Image();
+        steps->smoothed = smooth ? smoothed : Image();
         steps->patch = out.height;
     }
     return out;

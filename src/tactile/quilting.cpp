@@ -22,6 +22,8 @@ enum Side : unsigned { kLeft = 1, kTop = 2, kRight = 4, kBottom = 8, kSideTypes 
 // Placed pixels that count as "the same" as a candidate: relative to the overlap's energy,
 // far above FFT rounding (~1e-15) and far below any real mismatch.
 constexpr double kZeroErrorRelative = 1e-9;
+// Error of a candidate that may not be used (see QuiltOptions::min_contrast).
+constexpr double kExcluded = std::numeric_limits<double>::infinity();
 
 struct Grid {
     int n = 0;        // blocks per side
@@ -70,6 +72,8 @@ struct Exemplar {
     std::vector<fftw::ComplexBuffer> spectra;  // F(E_c) per channel
     // Per side set: sum over the mask of sum_c E_c^2 for every candidate position.
     std::vector<std::vector<double>> masked_energy;
+    // Per candidate: 1 when its contrast is below QuiltOptions::min_contrast.
+    std::vector<std::uint8_t> excluded;
 
     std::size_t spectrum_size() const { return std::size_t(height) * std::size_t(width / 2 + 1); }
     std::size_t candidates() const { return std::size_t(positions_x) * std::size_t(positions_y); }
@@ -151,6 +155,7 @@ public:
 
 private:
     void prepare_exemplar(Exemplar& e, const Image& image);
+    void exclude_flat_candidates();
     void place_block(int row, int col, Scratch& s, double& cut_error, double& random_error);
     void search(int row, int col, unsigned sides, Scratch& s, int& chosen_exemplar, int& chosen_x,
                 int& chosen_y, double& random_error);
@@ -177,6 +182,8 @@ Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options,
         throw_error("quilting: --overlap must be in (0, 0.5], got {}", options.overlap);
     if (!(options.tolerance >= 0.0f))
         throw_error("quilting: --tolerance must be >= 0, got {}", options.tolerance);
+    if (!(options.min_contrast >= 0.0f && options.min_contrast <= 1.0f))
+        throw_error("quilting: --min-contrast must be in [0, 1], got {}", options.min_contrast);
     if (options.size < options.block)
         throw_error("quilting: --size {} is smaller than the block {}", options.size, options.block);
     m_grid.block = options.block;
@@ -210,6 +217,52 @@ Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options,
     }
     m_exemplars.resize(images.size());
     for (std::size_t i = 0; i < images.size(); ++i) prepare_exemplar(m_exemplars[i], images[i]);
+    exclude_flat_candidates();
+}
+
+// Standard deviation of every candidate block (all channels), from summed-area tables.
+std::vector<double> block_contrast(const Image& image, int block) {
+    const int w = image.width(), h = image.height(), channels = image.channels();
+    std::vector<double> sum(std::size_t(w + 1) * std::size_t(h + 1), 0.0), sum2(sum.size(), 0.0);
+    auto at = [&](int x, int y) { return std::size_t(y) * std::size_t(w + 1) + std::size_t(x); };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double v = 0, v2 = 0;
+            for (int c = 0; c < channels; ++c)
+                v += image.at(x, y, c), v2 += double(image.at(x, y, c)) * image.at(x, y, c);
+            sum[at(x + 1, y + 1)] = v + sum[at(x, y + 1)] + sum[at(x + 1, y)] - sum[at(x, y)];
+            sum2[at(x + 1, y + 1)] = v2 + sum2[at(x, y + 1)] + sum2[at(x + 1, y)] - sum2[at(x, y)];
+        }
+    const int px = w - block + 1, py = h - block + 1;
+    const double n = double(block) * block * channels;
+    std::vector<double> contrast(std::size_t(px) * std::size_t(py));
+    for (int y = 0; y < py; ++y)
+        for (int x = 0; x < px; ++x) {
+            auto box = [&](const std::vector<double>& t) {
+                return t[at(x + block, y + block)] - t[at(x, y + block)] - t[at(x + block, y)] + t[at(x, y)];
+            };
+            const double mean = box(sum) / n;
+            contrast[std::size_t(y) * std::size_t(px) + std::size_t(x)] =
+                std::sqrt(std::max(box(sum2) / n - mean * mean, 0.0));
+        }
+    return contrast;
+}
+
+void Quilter::exclude_flat_candidates() {
+    std::vector<std::vector<double>> contrast;
+    std::vector<double> all;
+    for (const Exemplar& e : m_exemplars) {
+        contrast.push_back(block_contrast(*e.image, m_grid.block));
+        all.insert(all.end(), contrast.back().begin(), contrast.back().end());
+    }
+    std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() / 2), all.end());
+    const double threshold = double(m_options.min_contrast) * all[all.size() / 2];
+    for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
+        m_exemplars[i].excluded.resize(contrast[i].size());
+        // Strictly below: with min_contrast <= 1 at least half of the candidates stay.
+        for (std::size_t k = 0; k < contrast[i].size(); ++k)
+            m_exemplars[i].excluded[k] = contrast[i][k] < threshold;
+    }
 }
 
 void Quilter::prepare_exemplar(Exemplar& e, const Image& image) {
@@ -298,8 +351,8 @@ void Quilter::search(int row, int col, unsigned sides, Scratch& s, int& chosen_e
     for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
         const Exemplar& e = m_exemplars[i];
         std::vector<double>& errors = s.errors[i];
-        if (sides == 0) {  // the first block: every position is equally good
-            std::fill(errors.begin(), errors.end(), 1.0);
+        if (sides == 0) {  // the first block: every allowed position is equally good
+            for (std::size_t k = 0; k < errors.size(); ++k) errors[k] = e.excluded[k] ? kExcluded : 1.0;
             continue;
         }
         // -2 * corr(E, M * T), summed over channels in the frequency domain.
@@ -329,6 +382,10 @@ void Quilter::search(int row, int col, unsigned sides, Scratch& s, int& chosen_e
                 const double ssd = energy[k] +
                                    scale * s.real[std::size_t(y) * std::size_t(e.width) + std::size_t(x)] +
                                    template_energy;
+                if (e.excluded[k]) {
+                    errors[k] = kExcluded;
+                    continue;
+                }
                 const double error = std::max(ssd, 0.0) / count;
                 errors[k] = error;
                 error_sum += error;
@@ -342,7 +399,9 @@ void Quilter::search(int row, int col, unsigned sides, Scratch& s, int& chosen_e
     // verbatim match (a constant exemplar), accept them all.
     const bool all_zero = !std::isfinite(minimum);
     const double limit = (1.0 + double(m_options.tolerance)) * minimum;
-    auto accepted = [&](double error) { return all_zero || sides == 0 || (error > zero && error < limit); };
+    auto accepted = [&](double error) {
+        return error != kExcluded && (all_zero || sides == 0 || (error > zero && error < limit));
+    };
     std::size_t total = 0;
     for (const auto& errors : s.errors)
         for (double error : errors) total += accepted(error);

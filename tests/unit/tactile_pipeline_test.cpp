@@ -220,7 +220,7 @@ TEST(Pipeline, AllNineTextureSamplesConvert) {
         // normals: the Poisson step loses only the non-integrable part.
         PatchOptions raw_options = patch_options;
         raw_options.high_pass = HighPass::None;
-        raw_options.smooth = false;
+        raw_options.smooth = Toggle::Off;
         const Image again = normal_map_from_height(extract_patch(input, raw_options));
         const TactileMap original = load_tactile_map(path);
         Image ox(240, 240, 1), ax(240, 240, 1);
@@ -247,7 +247,7 @@ TEST(Pipeline, FlatPatchAndEmptyContactGiveErrors) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("flat.npz: empty contact mask"), std::string::npos) << e.what();
     }
-    options.contact = ContactCrop::Off;
+    options.contact = Toggle::Off;
     EXPECT_THROW(extract_patch(input, options), Error);  // flat: nothing to texture
 }
 

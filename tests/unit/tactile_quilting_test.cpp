@@ -162,3 +162,34 @@ TEST(Quilting, StrawberryPatchQuiltsWithoutVisibleSeams) {
     RecordProperty("random_error_mm2", std::to_string(stats.mean_random_error));
     EXPECT_LT(stats.mean_cut_error, 0.05 * stats.mean_random_error);
 }
+
+TEST(Quilting, MinContrastStopsFlatAreasFromGrowing) {
+    // Textured except for a flat bottom-right quadrant: plain Efros-Freeman grows that flat
+    // quadrant, since flat blocks match flat overlaps best.
+    Image exemplar = synthetic_texture(96, 9);
+    for (int y = 48; y < 96; ++y)
+        for (int x = 48; x < 96; ++x) exemplar.at(x, y, 0) = 0.0f;
+    auto flat_fraction = [](const Image& image) {  // share of 16x16 windows without texture
+        int flat = 0, windows = 0;
+        for (int y = 0; y + 16 <= image.height(); y += 16)
+            for (int x = 0; x + 16 <= image.width(); x += 16, ++windows) {
+                double sum = 0, sum2 = 0;
+                for (int j = 0; j < 16; ++j)
+                    for (int i = 0; i < 16; ++i)
+                        sum += image.at(x + i, y + j, 0),
+                            sum2 += double(image.at(x + i, y + j, 0)) * image.at(x + i, y + j, 0);
+                flat += std::sqrt(std::max(sum2 / 256 - (sum / 256) * (sum / 256), 0.0)) < 0.05;
+            }
+        return double(flat) / windows;
+    };
+    QuiltOptions options;
+    options.size = 320;
+    options.block = 24;
+    const double plain = flat_fraction(quilt({exemplar}, options).image);
+    options.min_contrast = 0.5f;
+    const double guarded = flat_fraction(quilt({exemplar}, options).image);
+    RecordProperty("flat_plain", std::to_string(plain));
+    RecordProperty("flat_min_contrast", std::to_string(guarded));
+    EXPECT_GT(plain, 0.3);
+    EXPECT_LT(guarded, 0.05);
+}

@@ -38,8 +38,9 @@ struct HeightInputOptions {
 /// What was loaded, and whether it is a raw capture (then the contact mask applies).
 struct HeightInput {
     HeightMap map;
-    std::string kind;      ///< "npz dm", "npz gradients", "tmd", "height image", "normal map"
-    bool capture = false;  ///< a raw GelSight capture with a contact region (.npz)
+    std::string kind;           ///< "npz dm", "npz gradients", "tmd", "height image", "normal map"
+    bool capture = false;       ///< a raw GelSight capture with a contact region (.npz)
+    bool from_normals = false;  ///< integrated from a normal-map image (heights in mm)
 };
 
 /// Loads `path` (kind chosen by extension: .npz, .npy, .tmd, else an image by content).

@@ -12,29 +12,32 @@
 namespace tdf {
 
 enum class HighPass {
+    /// FftBlock; for normal-map inputs a Gaussian at a quarter of the input's width (5.1 mm for
+    /// a 240 px GelSight patch): it removes the slow drift of the integrated heights, which
+    /// would make quilting match absolute levels, and keeps millimetre-sized features.
+    Auto,
     FftBlock,  ///< the reference's spectral block (spec 6.2 step 2), `freq_threshold` bins
     Gaussian,  ///< Gaussian high-pass with a cut-off wavelength in mm
     None,
 };
 
-enum class ContactCrop {
-    Auto,  ///< on for raw captures (.npz/.npy), off for everything else
-    On,
-    Off,
-};
+/// A step that is on, off, or decided by the kind of input (see each option).
+enum class Toggle { Auto, On, Off };
 
-/// Step 1 (spec 6.2). Defaults match the reference.
+/// Step 1 (spec 6.2). Defaults match the reference for captures and height maps; normal-map
+/// inputs (already processed patches, like the paper's dataset) are filtered more gently by
+/// default, since the reference's 5-bin high-pass flattens features a few millimetres wide.
 struct PatchOptions {
-    HighPass high_pass = HighPass::FftBlock;
-    int freq_threshold = 5;  ///< FFT block half-size in frequency bins
-    float cutoff_mm = 2.0f;  ///< Gaussian cut-off wavelength
-    bool smooth = true;      ///< bilateral filter after the high-pass
+    HighPass high_pass = HighPass::Auto;
+    int freq_threshold = 5;        ///< FFT block half-size in frequency bins
+    float cutoff_mm = 2.0f;        ///< Gaussian cut-off wavelength
+    Toggle smooth = Toggle::Auto;  ///< bilateral filter after the high-pass; Auto: off for normal maps
     int bilateral_diameter = 5;
-    float sigma_color = 125.0f;  ///< mm, like the reference's value on heights in mm
-    float sigma_space = 125.0f;  ///< pixels
-    ContactCrop contact = ContactCrop::Auto;
-    float depth_threshold = 0.5f;  ///< mm, on the raw (possibly inverted) heights
-    int size = 256;                ///< output side in pixels after resampling; 0 = keep the crop
+    float sigma_color = 125.0f;     ///< mm, like the reference's value on heights in mm
+    float sigma_space = 125.0f;     ///< pixels
+    Toggle contact = Toggle::Auto;  ///< contact crop; Auto: on for raw captures (.npz/.npy) only
+    float depth_threshold = 0.5f;   ///< mm, on the raw (possibly inverted) heights
+    int size = 256;                 ///< output side in pixels after resampling; 0 = keep the crop
 };
 
 /// Intermediate images of step 1 for the step figures (empty when a step is skipped).

@@ -33,6 +33,10 @@ struct QuiltOptions {
     float overlap = 0.5f;     ///< overlap as a fraction of the block, in (0, 0.5]
     float tolerance = 0.1f;   ///< accept candidates with error < (1 + tolerance) * minimum
     std::uint64_t seed = 42;  ///< all random draws derive from it
+    /// Candidates whose standard deviation is below this fraction of the median candidate's are
+    /// never used, in [0, 1]. Plain Efros-Freeman (0, the reference) lets a low-contrast corner
+    /// of an exemplar grow into large uniform areas, since flat blocks match flat overlaps best.
+    float min_contrast = 0.0f;
     /// Wrap-around: the last column and row also match (and are cut against) the first ones,
     /// so the output tiles the plane without seams.
     bool tileable = false;
