@@ -1,5 +1,6 @@
-#include <tdf/core/error.h>
 #include <tdf/tactile/contact_mask.h>
+
+#include <tdf/core/error.h>
 
 #include <algorithm>
 #include <cstdint>

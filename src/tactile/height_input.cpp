@@ -1,7 +1,8 @@
+#include <tdf/tactile/height_input.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
-#include <tdf/tactile/height_input.h>
 #include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/npy_reader.h>
 #include <tdf/tactile/poisson.h>

@@ -1,5 +1,6 @@
-#include <tdf/core/error.h>
 #include <tdf/tactile/height_map.h>
+
+#include <tdf/core/error.h>
 
 #include <cmath>
 #include <cstdlib>

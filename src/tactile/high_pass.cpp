@@ -1,12 +1,12 @@
+#include <tdf/tactile/high_pass.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
-#include <tdf/tactile/high_pass.h>
+#include "fftw_plan_impl.h"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include "fftw_plan_impl.h"
 
 namespace tdf {
 

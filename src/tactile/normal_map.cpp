@@ -1,6 +1,7 @@
+#include <tdf/tactile/normal_map.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
-#include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/poisson.h>
 
 #include <algorithm>

@@ -1,9 +1,10 @@
+#include <tdf/tactile/pipeline.h>
+
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
 #include <tdf/tactile/contact_mask.h>
 #include <tdf/tactile/high_pass.h>
 #include <tdf/tactile/normal_map.h>
-#include <tdf/tactile/pipeline.h>
 #include <tdf/tactile/resample.h>
 
 #include <algorithm>

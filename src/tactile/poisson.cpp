@@ -1,10 +1,10 @@
-#include <tdf/core/error.h>
 #include <tdf/tactile/poisson.h>
+
+#include <tdf/core/error.h>
+#include "fftw_plan_impl.h"
 
 #include <algorithm>
 #include <cmath>
-
-#include "fftw_plan_impl.h"
 
 namespace tdf {
 

@@ -1,7 +1,9 @@
+#include <tdf/tactile/quilting.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
-#include <tdf/tactile/quilting.h>
+#include "fftw_plan_impl.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +11,6 @@
 #include <limits>
 #include <memory>
 #include <mutex>
-
-#include "fftw_plan_impl.h"
 
 namespace tdf {
 

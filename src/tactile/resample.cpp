@@ -1,6 +1,7 @@
+#include <tdf/tactile/resample.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
-#include <tdf/tactile/resample.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,8 @@
+#include <tdf/tactile/tactile_map.h>
+
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
 #include <tdf/tactile/height_map.h>
-#include <tdf/tactile/tactile_map.h>
 
 namespace tdf {
 

@@ -1,6 +1,7 @@
+#include <tdf/tactile/tmd_reader.h>
+
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
-#include <tdf/tactile/tmd_reader.h>
 
 #include <cmath>
 #include <cstdint>
