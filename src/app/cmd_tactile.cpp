@@ -8,7 +8,6 @@
 #include <tdf/tactile/pipeline.h>
 
 #include <filesystem>
-#include <map>
 #include <memory>
 
 #include "commands.h"
@@ -218,6 +217,94 @@ void log_quilt(const QuiltStats& s, const HeightMap& map) {
     log_verbose("quilted map: {}x{}", map.height.width(), map.height.height());
 }
 
+// Options of every step; each step reads the ones it registered.
+struct State {
+    InputArgs input;
+    PatchArgs patch;
+    QuiltArgs quilt, convert_quilt;
+    NormalArgs normal;
+    std::string in, out, steps_dir;
+    std::vector<std::string> inputs;
+    bool no_quilt = false;
+    CLI::App *height = nullptr, *patch_cmd = nullptr, *quilt_cmd = nullptr, *normal_cmd = nullptr,
+             *convert = nullptr;
+};
+
+void run_height(const State& s) {
+    require_exr(s.out, "height maps");
+    const HeightInput input = s.input.load(s.in);
+    write_height_map(s.out, input.map);
+    log_info("wrote {} ({}, {}x{}, {} mm per pixel)",
+             s.out,
+             input.kind,
+             input.map.height.width(),
+             input.map.height.height(),
+             input.map.mm_per_pixel);
+}
+
+void run_patch(const State& s) {
+    require_exr(s.out, "height patches");
+    const HeightMap patch = extract_patch(s.input.load(s.in), s.patch.resolved());
+    write_height_map(s.out, patch);
+    log_info("wrote {} ({}x{}, {} mm per pixel, height range {} mm)",
+             s.out,
+             patch.height.width(),
+             patch.height.height(),
+             patch.mm_per_pixel,
+             patch.reference_scale_mm);
+}
+
+void run_quilt(const State& s) {
+    require_exr(s.out, "quilted height maps");
+    std::vector<HeightMap> patches;
+    for (const std::string& path : s.inputs) patches.push_back(s.input.load(path).map);
+    QuiltStats stats;
+    const HeightMap quilted = quilt_height_maps(patches, s.quilt.options, &stats);
+    write_height_map(s.out, quilted);
+    log_quilt(stats, quilted);
+    log_info("wrote {} ({}x{})", s.out, quilted.height.width(), quilted.height.height());
+}
+
+void run_normal(const State& s) { s.normal.write(s.out, s.input.load(s.in).map); }
+
+void run_convert(const State& s) {
+    if (s.no_quilt && s.inputs.size() > 1)
+        throw_error("--no-quilt makes a normal map of one patch, but {} inputs were given", s.inputs.size());
+    const PatchOptions patch_options = s.patch.resolved();
+    const bool steps = !s.steps_dir.empty();
+    if (steps) ensure_folder(s.steps_dir);
+    auto step_path = [&](const std::string& name) { return s.steps_dir + "/" + name; };
+    std::vector<HeightMap> patches;
+    for (std::size_t i = 0; i < s.inputs.size(); ++i) {
+        PatchSteps figures;
+        patches.push_back(
+            extract_patch(s.input.load(s.inputs[i]), patch_options, steps ? &figures : nullptr));
+        if (!steps) continue;
+        const std::string prefix = s.inputs.size() > 1 ? fmt::format("input{}_", i) : "";
+        write_height_preview(step_path(prefix + "1_raw_height.png"), figures.raw);
+        if (!figures.contact_mask.empty())
+            write_png(step_path(prefix + "2_contact_mask.png"), figures.contact_mask);
+        write_height_preview(step_path(prefix + "3_high_pass.png"), figures.high_passed);
+        if (!figures.smoothed.empty())
+            write_height_preview(step_path(prefix + "4_smoothed.png"), figures.smoothed);
+        write_height_preview(step_path(prefix + "5_patch.png"), figures.patch);
+    }
+    HeightMap result = patches[0];
+    if (!s.no_quilt) {
+        QuiltStats stats;
+        result = quilt_height_maps(patches, s.convert_quilt.options, &stats);
+        log_quilt(stats, result);
+        if (steps) write_height_preview(step_path("6_quilted.png"), result.height);
+    }
+    s.normal.write(s.out, result);
+    if (steps) {  // an 8-bit PNG for viewing, whatever the output's format
+        NormalArgs preview = s.normal;
+        preview.bits = 8;
+        preview.exr = false;
+        preview.write(step_path("7_normal_map.png"), result);
+    }
+}
+
 }  // namespace
 
 Command register_tactile(CLI::App& root) {
@@ -225,17 +312,6 @@ Command register_tactile(CLI::App& root) {
         "tactile", "tactile input: GelSight captures / height / normal maps -> tileable normal maps");
     app->require_subcommand(1);
 
-    struct State {
-        InputArgs input;
-        PatchArgs patch;
-        QuiltArgs quilt, convert_quilt;
-        NormalArgs normal;
-        std::string in, out, steps_dir;
-        std::vector<std::string> inputs;
-        bool no_quilt = false;
-        CLI::App *height = nullptr, *patch_cmd = nullptr, *quilt_cmd = nullptr, *normal_cmd = nullptr,
-                 *convert = nullptr;
-    };
     auto s = std::make_shared<State>();
 
     s->height =
@@ -285,73 +361,11 @@ Command register_tactile(CLI::App& root) {
     Command command;
     command.app = app;
     command.run = [s]() -> int {
-        if (s->height->parsed()) {
-            require_exr(s->out, "height maps");
-            const HeightInput input = s->input.load(s->in);
-            write_height_map(s->out, input.map);
-            log_info("wrote {} ({}, {}x{}, {} mm per pixel)",
-                     s->out,
-                     input.kind,
-                     input.map.height.width(),
-                     input.map.height.height(),
-                     input.map.mm_per_pixel);
-        } else if (s->patch_cmd->parsed()) {
-            require_exr(s->out, "height patches");
-            const HeightMap patch = extract_patch(s->input.load(s->in), s->patch.resolved());
-            write_height_map(s->out, patch);
-            log_info("wrote {} ({}x{}, {} mm per pixel, height range {} mm)",
-                     s->out,
-                     patch.height.width(),
-                     patch.height.height(),
-                     patch.mm_per_pixel,
-                     patch.reference_scale_mm);
-        } else if (s->quilt_cmd->parsed()) {
-            require_exr(s->out, "quilted height maps");
-            std::vector<HeightMap> patches;
-            for (const std::string& path : s->inputs) patches.push_back(s->input.load(path).map);
-            QuiltStats stats;
-            const HeightMap quilted = quilt_height_maps(patches, s->quilt.options, &stats);
-            write_height_map(s->out, quilted);
-            log_quilt(stats, quilted);
-            log_info("wrote {} ({}x{})", s->out, quilted.height.width(), quilted.height.height());
-        } else if (s->normal_cmd->parsed()) {
-            s->normal.write(s->out, s->input.load(s->in).map);
-        } else if (s->convert->parsed()) {
-            const PatchOptions patch_options = s->patch.resolved();
-            const bool steps = !s->steps_dir.empty();
-            if (steps) ensure_folder(s->steps_dir);
-            auto step_path = [&](const std::string& name) { return s->steps_dir + "/" + name; };
-            std::vector<HeightMap> patches;
-            for (std::size_t i = 0; i < s->inputs.size(); ++i) {
-                PatchSteps figures;
-                patches.push_back(
-                    extract_patch(s->input.load(s->inputs[i]), patch_options, steps ? &figures : nullptr));
-                if (!steps) continue;
-                const std::string prefix = s->inputs.size() > 1 ? fmt::format("input{}_", i) : "";
-                write_height_preview(step_path(prefix + "1_raw_height.png"), figures.raw);
-                if (!figures.contact_mask.empty())
-                    write_png(step_path(prefix + "2_contact_mask.png"), figures.contact_mask);
-                write_height_preview(step_path(prefix + "3_high_pass.png"), figures.high_passed);
-                if (!figures.smoothed.empty())
-                    write_height_preview(step_path(prefix + "4_smoothed.png"), figures.smoothed);
-                write_height_preview(step_path(prefix + "5_patch.png"), figures.patch);
-            }
-            HeightMap result = patches[0];
-            if (!s->no_quilt) {
-                QuiltStats stats;
-                result = quilt_height_maps(patches, s->convert_quilt.options, &stats);
-                log_quilt(stats, result);
-                if (steps) write_height_preview(step_path("6_quilted.png"), result.height);
-            }
-            s->normal.write(s->out, result);
-            if (steps) {
-                const std::filesystem::path link = step_path("7_normal_map.png");
-                NormalArgs png = s->normal;
-                png.bits = 8;
-                png.exr = false;
-                png.write(link.string(), result);
-            }
-        }
+        if (s->height->parsed()) run_height(*s);
+        if (s->patch_cmd->parsed()) run_patch(*s);
+        if (s->quilt_cmd->parsed()) run_quilt(*s);
+        if (s->normal_cmd->parsed()) run_normal(*s);
+        if (s->convert->parsed()) run_convert(*s);
         return 0;
     };
     return command;

@@ -42,7 +42,7 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
         case HighPass::Gaussian:
             filtered = high_pass_gaussian(raw.height, cutoff_mm, raw.mm_per_pixel);
             break;
-        case HighPass::Auto:
+        case HighPass::Auto:  // resolved above
         case HighPass::None:
             filtered = raw.height;
             break;
