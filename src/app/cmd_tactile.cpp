@@ -128,12 +128,12 @@ struct PatchArgs {
 
 struct QuiltArgs {
     QuiltOptions options;
-    /// `convert` defaults: tileable and min-contrast 0.5 (sensible results for any input);
+    /// `convert` defaults: tileable, min-contrast 0.5 and feather 2 (good maps from any input);
     /// `quilt` defaults to the reference's plain algorithm.
     void add(CLI::App* app, bool convert_defaults) {
         const bool tileable_default = convert_defaults;
         options.tileable = convert_defaults;
-        if (convert_defaults) options.min_contrast = 0.5f;
+        if (convert_defaults) options.min_contrast = 0.5f, options.feather = 2;
         app->add_option(
                "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride)")
             ->check(CLI::PositiveNumber)
@@ -151,6 +151,10 @@ struct QuiltArgs {
                options.min_contrast,
                "skip candidate blocks with a standard deviation below this fraction of the median (0 = "
                "reference)")
+            ->capture_default_str();
+        app->add_option(
+               "--feather", options.feather, "blend across cuts over +-N pixels (0 = hard cut, reference)")
+            ->check(CLI::NonNegativeNumber)
             ->capture_default_str();
         app->add_option("--seed", options.seed, "random seed")->capture_default_str();
         if (tileable_default)

@@ -1,9 +1,7 @@
-#include <tdf/tactile/quilting.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
-#include "fftw_plan_impl.h"
+#include <tdf/tactile/quilting.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +9,8 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+
+#include "fftw_plan_impl.h"
 
 namespace tdf {
 
@@ -88,6 +88,7 @@ struct Scratch {
     std::vector<double> path_cost;
     std::vector<std::uint8_t> keep_old;  // B x B
     std::vector<float> strip_cost;       // B x O, one side's cost along its seam
+    std::vector<float> weight, blurred;  // B x B, weight of the new block (feathering)
     std::vector<int> seam;
 };
 
@@ -156,6 +157,7 @@ public:
 private:
     void prepare_exemplar(Exemplar& e, const Image& image);
     void exclude_flat_candidates();
+    void new_block_weights(unsigned sides, Scratch& s) const;
     void place_block(int row, int col, Scratch& s, double& cut_error, double& random_error);
     void search(int row, int col, unsigned sides, Scratch& s, int& chosen_exemplar, int& chosen_x,
                 int& chosen_y, double& random_error);
@@ -184,6 +186,8 @@ Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options,
         throw_error("quilting: --tolerance must be >= 0, got {}", options.tolerance);
     if (!(options.min_contrast >= 0.0f && options.min_contrast <= 1.0f))
         throw_error("quilting: --min-contrast must be in [0, 1], got {}", options.min_contrast);
+    if (options.feather < 0 || 2 * options.feather >= options.block)
+        throw_error("quilting: --feather must be in [0, block / 2), got {}", options.feather);
     if (options.size < options.block)
         throw_error("quilting: --size {} is smaller than the block {}", options.size, options.block);
     m_grid.block = options.block;
@@ -470,13 +474,46 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
         }
     }
     cut_error = seam_pixels ? seam_sum / double(seam_pixels) : 0.0;
+    new_block_weights(sides, s);
+    const std::vector<std::uint8_t>& placed = m_masks[sides];
     for (int y = 0; y < b; ++y)
         for (int x = 0; x < b; ++x) {
-            if (s.keep_old[std::size_t(y) * std::size_t(b) + std::size_t(x)]) continue;
+            const std::size_t i = std::size_t(y) * std::size_t(b) + std::size_t(x);
+            const float w = s.weight[i];
+            if (w == 0.0f) continue;
             const int cx = m_grid.at(ox, x), cy = m_grid.at(oy, y);
-            for (int c = 0; c < m_channels; ++c) m_canvas.at(cx, cy, c) = source.at(ex + x, ey + y, c);
+            for (int c = 0; c < m_channels; ++c) {
+                float& out = m_canvas.at(cx, cy, c);
+                const float fresh = source.at(ex + x, ey + y, c);
+                out = placed[i] && w < 1.0f ? out + w * (fresh - out) : fresh;
+            }
             m_filled[std::size_t(cy) * std::size_t(m_grid.canvas) + std::size_t(cx)] = 1;
         }
+}
+
+void Quilter::new_block_weights(unsigned sides, Scratch& s) const {
+    const int b = m_grid.block, f = m_options.feather;
+    for (std::size_t i = 0; i < s.weight.size(); ++i) s.weight[i] = s.keep_old[i] ? 0.0f : 1.0f;
+    if (f == 0) return;  // the reference's hard cut
+    // Box-blur the cut across +-f pixels (separable, clamped to the block), only where placed
+    // pixels exist to blend with: the step a cut leaves in a height map becomes a ramp.
+    auto blur = [&](const std::vector<float>& in, std::vector<float>& out, bool along_x) {
+        for (int y = 0; y < b; ++y)
+            for (int x = 0; x < b; ++x) {
+                float sum = 0;
+                for (int d = -f; d <= f; ++d) {
+                    const int sx = along_x ? std::clamp(x + d, 0, b - 1) : x;
+                    const int sy = along_x ? y : std::clamp(y + d, 0, b - 1);
+                    sum += in[std::size_t(sy) * std::size_t(b) + std::size_t(sx)];
+                }
+                out[std::size_t(y) * std::size_t(b) + std::size_t(x)] = sum / float(2 * f + 1);
+            }
+    };
+    blur(s.weight, s.blurred, true);
+    blur(s.blurred, s.weight, false);
+    const std::vector<std::uint8_t>& placed = m_masks[sides];
+    for (std::size_t i = 0; i < s.weight.size(); ++i)
+        if (!placed[i]) s.weight[i] = 1.0f;
 }
 
 void Quilter::place_block(int row, int col, Scratch& s, double& cut_error, double& random_error) {
@@ -526,6 +563,8 @@ QuiltResult Quilter::run() {
         for (const Exemplar& e : m_exemplars) s->errors.emplace_back(e.candidates());
         s->pixel_error.resize(std::size_t(m_grid.block) * std::size_t(m_grid.block));
         s->keep_old.resize(s->pixel_error.size());
+        s->weight.resize(s->pixel_error.size());
+        s->blurred.resize(s->pixel_error.size());
         s->strip_cost.resize(std::size_t(m_grid.block) * std::size_t(m_grid.overlap));
         return s;
     });

@@ -45,6 +45,7 @@ TEST(Quilting, SameSeedSameOutputOnOneAndTwoThreads) {
     options.seed = 7;
     for (bool tileable : {false, true}) {
         options.tileable = tileable;
+        options.feather = tileable ? 2 : 0;  // blending reads placed pixels too
         Image one, two;
         {
             ThreadLimit limit(1);
@@ -138,6 +139,9 @@ TEST(Quilting, BadInputGivesClearErrors) {
                   quilt({Image(64, 64, 1), Image(64, 64, 3)}, options);
               }).find("channels"),
               std::string::npos);
+    options.feather = 20;
+    EXPECT_NE(error_of([&] { quilt({Image(64, 64, 1)}, options); }).find("--feather"), std::string::npos);
+    options.feather = 0;
     options.overlap = 0.8f;
     EXPECT_NE(error_of([&] { quilt({Image(64, 64, 1)}, options); }).find("--overlap"), std::string::npos);
     // A constant exemplar is no error: every candidate matches exactly.
@@ -192,4 +196,33 @@ TEST(Quilting, MinContrastStopsFlatAreasFromGrowing) {
     RecordProperty("flat_min_contrast", std::to_string(guarded));
     EXPECT_GT(plain, 0.3);
     EXPECT_LT(guarded, 0.05);
+}
+
+TEST(Quilting, FeatheringRemovesTheStepsOfHardCuts) {
+    TDF_REQUIRE_SHARED_DATA(kStrawberry);
+    const HeightMap patch =
+        extract_patch(load_height_input(test::shared_data_dir() + "/" + kStrawberry), PatchOptions{});
+    // Mean squared Laplacian: the high-frequency energy a normal map shows. Hard cuts add steps
+    // that the exemplar does not have; feathering turns them into ramps.
+    auto roughness = [](const Image& image) {
+        double sum = 0;
+        for (int y = 1; y + 1 < image.height(); ++y)
+            for (int x = 1; x + 1 < image.width(); ++x) {
+                const double l = 4.0 * image.at(x, y, 0) - image.at(x - 1, y, 0) - image.at(x + 1, y, 0) -
+                                 image.at(x, y - 1, 0) - image.at(x, y + 1, 0);
+                sum += l * l;
+            }
+        return sum / (double(image.width() - 2) * double(image.height() - 2));
+    };
+    QuiltOptions options;
+    options.size = 400;
+    options.min_contrast = 0.5f;
+    const double exemplar = roughness(patch.height);
+    const double hard = roughness(quilt({patch.height}, options).image) / exemplar;
+    options.feather = 2;
+    const double feathered = roughness(quilt({patch.height}, options).image) / exemplar;
+    RecordProperty("roughness_ratio_hard", std::to_string(hard));
+    RecordProperty("roughness_ratio_feather2", std::to_string(feathered));
+    EXPECT_GT(hard, 1.5);
+    EXPECT_LT(feathered, 1.25);
 }

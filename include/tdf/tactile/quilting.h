@@ -9,7 +9,7 @@
 /// rounding). Candidates with zero error (a verbatim continuation) are skipped and one of those
 /// with error < (1 + tolerance) * minimum is drawn uniformly; it is pasted with a
 /// minimum-error boundary cut (dynamic programming, 8-neighbour paths) on every side that
-/// overlaps placed pixels.
+/// overlaps placed pixels, optionally feathered.
 ///
 /// Reproducibility: block (row, col) draws only from Rng::stream(seed, row * n + col), and
 /// blocks whose footprints do not overlap are placed concurrently in dependency levels, which
@@ -37,6 +37,9 @@ struct QuiltOptions {
     /// never used, in [0, 1]. Plain Efros-Freeman (0, the reference) lets a low-contrast corner
     /// of an exemplar grow into large uniform areas, since flat blocks match flat overlaps best.
     float min_contrast = 0.0f;
+    /// Blend across each boundary cut over +-feather pixels (0 = the reference's hard cut). A
+    /// hard cut leaves a small step in a height map, which a normal map shows as a thin line.
+    int feather = 0;
     /// Wrap-around: the last column and row also match (and are cut against) the first ones,
     /// so the output tiles the plane without seams.
     bool tileable = false;
