@@ -15,6 +15,7 @@ find_package(PNG REQUIRED)
 find_package(JPEG REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(FFTW3 REQUIRED IMPORTED_TARGET fftw3 fftw3f)
+find_package(ZLIB REQUIRED)
 
 # OpenImageIO is used only by the comparison tool path that wants its idiff semantics; it costs
 # ~0.45 s of process start-up (261 shared libraries), so the core library never links it.

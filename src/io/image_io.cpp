@@ -9,6 +9,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfCompression.h>
+#include <ImfStringAttribute.h>
 #include <Iex.h>
 #include <jpeglib.h>
 #include <png.h>
@@ -60,7 +61,7 @@ void png_error_handler(png_structp png, png_const_charp message) {
 }
 void png_warning_handler(png_structp, png_const_charp) {}
 
-Image read_png(const std::string& path) {
+Image read_png(const std::string& path, ImageMetadata* metadata = nullptr) {
     FilePtr file = open_file(path, "rb");
     PngErrorContext context{path, {}};
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler,
@@ -91,7 +92,13 @@ Image read_png(const std::string& path) {
     rows.resize(height);
     for (png_uint_32 y = 0; y < height; ++y) rows[y] = buffer.data() + y * row_bytes;
     png_read_image(png, rows.data());
-    png_read_end(png, nullptr);
+    png_read_end(png, info);  // `info` also collects text chunks that follow the pixels
+    if (metadata) {
+        png_textp text = nullptr;
+        const int count = png_get_text(png, info, &text, nullptr);
+        for (int i = 0; i < count; ++i)
+            (*metadata)[text[i].key] = text[i].text ? std::string(text[i].text) : std::string();
+    }
     png_destroy_read_struct(&png, &info, nullptr);
 
     image = Image(int(width), int(height), channels);
@@ -112,7 +119,8 @@ std::uint32_t quantize_value(float v, float max_value, Quantize q) {
     return std::uint32_t(q == Quantize::Round ? std::floor(v + 0.5f) : std::floor(v));
 }
 
-void write_png_file(const std::string& path, const Image& image, int bits, Quantize quantize) {
+void write_png_file(const std::string& path, const Image& image, int bits, Quantize quantize,
+                    const ImageMetadata& metadata) {
     FilePtr file = open_file(path, "wb");
     PngErrorContext context{path, {}};
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler,
@@ -132,6 +140,16 @@ void write_png_file(const std::string& path, const Image& image, int bits, Quant
                  color_types[channels], PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                  PNG_FILTER_TYPE_DEFAULT);
     png_set_compression_level(png, 6);
+    std::vector<png_text> texts;
+    for (const auto& [key, value] : metadata) {
+        png_text text{};
+        text.compression = PNG_TEXT_COMPRESSION_NONE;
+        text.key = const_cast<char*>(key.c_str());
+        text.text = const_cast<char*>(value.c_str());
+        text.text_length = value.size();
+        texts.push_back(text);
+    }
+    if (!texts.empty()) png_set_text(png, info, texts.data(), int(texts.size()));
     png_write_info(png, info);
     const float max_value = bits == 16 ? 65535.0f : 255.0f;
     for (int y = 0; y < image.height(); ++y) {
@@ -224,16 +242,22 @@ int channel_rank(const std::string& name) {
 }  // namespace
 
 Image read_image(const std::string& path) {
+    ImageMetadata unused;
+    return read_image(path, unused);
+}
+
+Image read_image(const std::string& path, ImageMetadata& metadata) {
+    metadata.clear();
     if (!std::filesystem::exists(path)) throw_error("cannot open '{}': no such file", path);
     unsigned char magic[4] = {0, 0, 0, 0};
     {
         FilePtr file = open_file(path, "rb");
         if (std::fread(magic, 1, 4, file.get()) != 4) throw_error("cannot read image '{}': file is too short", path);
     }
-    if (magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') return read_png(path);
+    if (magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') return read_png(path, &metadata);
     if (magic[0] == 0xFF && magic[1] == 0xD8) return read_jpeg(path);
     if (magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) {
-        std::vector<ExrLayer> layers = read_exr_layers(path);
+        std::vector<ExrLayer> layers = read_exr_layers(path, &metadata);
         int channels = 0;
         for (const auto& l : layers) channels += l.image.channels();
         Image out(layers[0].image.width(), layers[0].image.height(), channels);
@@ -251,14 +275,25 @@ Image read_image(const std::string& path) {
 }
 
 void write_png(const std::string& path, const Image& image, int bits, Quantize quantize) {
+    write_png(path, image, ImageMetadata{}, bits, quantize);
+}
+
+void write_png(const std::string& path, const Image& image, const ImageMetadata& metadata, int bits,
+               Quantize quantize) {
+    for (const auto& entry : metadata)
+        if (entry.first.empty() || entry.first.size() > 79)
+            throw_error("cannot write PNG '{}': metadata key '{}' must have 1 to 79 characters", path, entry.first);
     if (bits != 8 && bits != 16) throw_error("cannot write PNG '{}': bit depth must be 8 or 16, got {}", path, bits);
     if (image.channels() < 1 || image.channels() > 4)
         throw_error("cannot write PNG '{}': {} channels (1 to 4 supported)", path, image.channels());
     if (image.empty()) throw_error("cannot write PNG '{}': the image is empty", path);
-    write_atomically(path, [&](const std::string& tmp) { write_png_file(tmp, image, bits, quantize); });
+    write_atomically(path, [&](const std::string& tmp) { write_png_file(tmp, image, bits, quantize, metadata); });
 }
 
-void write_exr(const std::string& path, const std::vector<ExrLayer>& layers, ExrPixelType type) {
+namespace {
+
+void write_exr_file(const std::string& path, const std::vector<ExrLayer>& layers, ExrPixelType type,
+                    const ImageMetadata& metadata) {
     if (layers.empty()) throw_error("cannot write EXR '{}': no layers", path);
     const int width = layers[0].image.width(), height = layers[0].image.height();
     if (width <= 0 || height <= 0) throw_error("cannot write EXR '{}': the image is empty", path);
@@ -275,6 +310,7 @@ void write_exr(const std::string& path, const std::vector<ExrLayer>& layers, Exr
         try {
             Imf::Header header(width, height);
             header.compression() = Imf::ZIP_COMPRESSION;
+            for (const auto& [key, value] : metadata) header.insert(key, Imf::StringAttribute(value));
             Imf::FrameBuffer frame;
             for (const auto& layer : layers) {
                 const int channels = layer.image.channels();
@@ -298,15 +334,29 @@ void write_exr(const std::string& path, const std::vector<ExrLayer>& layers, Exr
     });
 }
 
+}  // namespace
+
+void write_exr(const std::string& path, const std::vector<ExrLayer>& layers, ExrPixelType type) {
+    write_exr_file(path, layers, type, ImageMetadata{});
+}
+
 void write_exr(const std::string& path, const Image& image, ExrPixelType type) {
     write_exr(path, {ExrLayer{"", default_channel_names(image.channels()), image}}, type);
 }
 
-std::vector<ExrLayer> read_exr_layers(const std::string& path) {
+void write_exr(const std::string& path, const Image& image, const ImageMetadata& metadata, ExrPixelType type) {
+    write_exr_file(path, {ExrLayer{"", default_channel_names(image.channels()), image}}, type, metadata);
+}
+
+std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* metadata) {
     if (!std::filesystem::exists(path)) throw_error("cannot open '{}': no such file", path);
     try {
         Imf::InputFile file(path.c_str());
         const Imath::Box2i window = file.header().dataWindow();
+        if (metadata)
+            for (auto it = file.header().begin(); it != file.header().end(); ++it)
+                if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+                    (*metadata)[it.name()] = text->value();
         const int width = window.max.x - window.min.x + 1;
         const int height = window.max.y - window.min.y + 1;
         std::map<std::string, std::vector<std::string>> layer_channels;  // layer -> channel suffixes

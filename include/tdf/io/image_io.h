@@ -10,6 +10,7 @@
 /// All writers write atomically (temporary name, then rename).
 #include <tdf/core/image.h>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,8 +23,19 @@ Image read_image(const std::string& path);
 
 enum class Quantize { Truncate, Round };
 
+/// Key-value text stored with an image: PNG tEXt chunks (keys of 1-79 Latin-1 characters) or
+/// EXR string attributes. tdf uses keys such as "tdf:mm_per_pixel" (README "Conventions").
+using ImageMetadata = std::map<std::string, std::string>;
+
+/// read_image that also returns the file's text metadata (PNG tEXt/zTXt/iTXt chunks, EXR
+/// string attributes; JPEG has none). Other attributes are not returned.
+Image read_image(const std::string& path, ImageMetadata& metadata);
+
 /// Writes 1-4 channels as an 8- or 16-bit PNG.
 void write_png(const std::string& path, const Image& image, int bits = 8,
+               Quantize quantize = Quantize::Truncate);
+/// write_png with text metadata, stored as uncompressed tEXt chunks before the pixels.
+void write_png(const std::string& path, const Image& image, const ImageMetadata& metadata, int bits = 8,
                Quantize quantize = Quantize::Truncate);
 
 /// One named group of channels in a multi-layer EXR: layer "albedo" with channel names
@@ -43,9 +55,13 @@ void write_exr(const std::string& path, const std::vector<ExrLayer>& layers,
                ExrPixelType type = ExrPixelType::Float);
 /// Convenience: one unnamed layer with R,G,B,A / Y names chosen by channel count.
 void write_exr(const std::string& path, const Image& image, ExrPixelType type = ExrPixelType::Float);
+/// write_exr with text metadata, stored as string attributes of the header.
+void write_exr(const std::string& path, const Image& image, const ImageMetadata& metadata,
+               ExrPixelType type = ExrPixelType::Float);
 
 /// Reads every channel of an EXR as float, grouped by layer (the text before the last '.').
-std::vector<ExrLayer> read_exr_layers(const std::string& path);
+/// `metadata`, when given, receives the header's string attributes.
+std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* metadata = nullptr);
 
 /// Lower-cased extension with the dot, e.g. ".png".
 std::string lower_extension(const std::string& path);

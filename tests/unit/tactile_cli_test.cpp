@@ -1,0 +1,83 @@
+// End-to-end runs of the `tdf tactile` steps through the built binary.
+#include <gtest/gtest.h>
+#include <tdf/io/image_io.h>
+#include <tdf/tactile/tactile_map.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "common/test_paths.h"
+
+using namespace tdf;
+
+namespace {
+
+const std::string kStrawberry = "tactile/gelsight_raw/strawberry_00000_gxgy.npz";
+
+struct CliRun {
+    int status = -1;
+    std::string output;  // stdout and stderr
+};
+
+CliRun run_tdf(const std::string& arguments) {
+    CliRun run;
+    const std::string command = std::string(TDF_BINARY_DIR) + "/tdf " + arguments + " 2>&1";
+    FILE* pipe = popen(command.c_str(), "r");
+    if (!pipe) return run;
+    std::array<char, 512> buffer;
+    while (std::fgets(buffer.data(), int(buffer.size()), pipe)) run.output += buffer.data();
+    const int status = pclose(pipe);
+    run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return run;
+}
+
+}  // namespace
+
+#define TDF_REQUIRE_TDF_BINARY()                                                              \
+    do {                                                                                      \
+        if (!std::filesystem::exists(std::string(TDF_BINARY_DIR) + "/tdf"))                   \
+            GTEST_SKIP() << "the tdf binary is not built (cmake --build build --target tdf)"; \
+    } while (0)
+
+TEST(TactileCli, StepsChainFromCaptureToNormalMap) {
+    TDF_REQUIRE_TDF_BINARY();
+    TDF_REQUIRE_SHARED_DATA(kStrawberry);
+    const std::string capture = test::shared_data_dir() + "/" + kStrawberry;
+    const std::string dir = test::scratch_dir() + "/cli";
+    std::filesystem::create_directories(dir);
+    CliRun run = run_tdf("tactile patch " + capture + " -o " + dir + "/patch.exr -q");
+    ASSERT_EQ(run.status, 0) << run.output;
+    run = run_tdf("tactile quilt " + dir + "/patch.exr -o " + dir + "/quilt.exr --size 200 --tileable -q");
+    ASSERT_EQ(run.status, 0) << run.output;
+    run = run_tdf("tactile normal " + dir + "/quilt.exr -o " + dir + "/normal.png --bits 16 --exr -q");
+    ASSERT_EQ(run.status, 0) << run.output;
+    const TactileMap map = load_tactile_map(dir + "/normal.png");
+    EXPECT_EQ(map.normals.width(), 200);
+    EXPECT_NEAR(map.mm_per_pixel, 0.0797f, 1e-4f);  // 0.085 mm x 240 px crop / 256 px patch
+    const TactileMap exr = load_tactile_map(dir + "/normal.exr");
+    for (std::size_t i = 0; i < exr.normals.values().size(); i += 101)
+        ASSERT_NEAR(exr.normals.values()[i], map.normals.values()[i], 2.0f / 65535.0f + 1e-6f);
+
+    run = run_tdf("tactile convert " + capture + " -o " + dir + "/convert.png --size 120 --steps-png " + dir +
+                  "/steps -q");
+    ASSERT_EQ(run.status, 0) << run.output;
+    for (const char* step : {"1_raw_height",
+                             "2_contact_mask",
+                             "3_high_pass",
+                             "4_smoothed",
+                             "5_patch",
+                             "6_quilted",
+                             "7_normal_map"})
+        EXPECT_TRUE(std::filesystem::exists(dir + "/steps/" + step + ".png")) << step;
+}
+
+TEST(TactileCli, BadInputFailsWithOneLineNamingTheFile) {
+    TDF_REQUIRE_TDF_BINARY();
+    const std::string missing = test::scratch_dir() + "/no_such_capture.npz";
+    const CliRun run = run_tdf("tactile height " + missing + " -o " + test::scratch_dir() + "/x.exr");
+    EXPECT_EQ(run.status, 1);
+    EXPECT_EQ(run.output.rfind("tdf tactile: ", 0), 0u) << run.output;
+    EXPECT_NE(run.output.find(missing), std::string::npos) << run.output;
+}
