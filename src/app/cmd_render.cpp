@@ -1,17 +1,85 @@
-// Placeholder until `tdf render` lands.
+// `tdf render scene.json -o out/ [key=value ...]`: one multi-layer EXR per view.
 #include "commands.h"
 
-#include <cstdio>
+#include <tdf/core/atomic_file.h>
+#include <tdf/core/error.h>
+#include <tdf/core/log.h>
+#include <tdf/core/progress.h>
+#include <tdf/io/image_io.h>
+#include <tdf/render/scene_assets.h>
+
+#include <filesystem>
 
 namespace tdf::app {
 
+namespace {
+
+struct RenderOptions {
+    std::string scene;
+    std::string output;
+    std::vector<std::string> overrides;
+    bool png = false;
+    bool half = false;
+    int turntable = 0;
+};
+
+int run_render(const RenderOptions& o) {
+    std::vector<std::string> overrides = o.overrides;
+    if (o.turntable > 0) {
+        // Turntable mode replaces the scene's views.
+        for (const char* clear : {"views.orbit=[]", "views.random.count=0", "views.patches.count=0"})
+            overrides.emplace_back(clear);
+        overrides.push_back(fmt::format("views.turntable.count={}", o.turntable));
+    }
+    const SceneDescription description = load_scene(o.scene, overrides);
+    log_info("scene {}: seed {}, {}x{}, ssaa {}, {} shading", o.scene, description.seed, description.width,
+             description.height, description.ssaa, description.shading);
+    const auto assets = load_scene_assets(description);
+    log_info("mesh {}: {} vertices, {} triangles; {} views", description.mesh, assets->mesh.positions.size(),
+             assets->mesh.triangles.size(), assets->views.size());
+    ensure_folder(o.output);
+    const std::string resolved = o.output + "/resolved_scene.json";
+    write_text_atomically(resolved, description.to_json().dump(2) + "\n");
+    log_verbose("resolved scene written to {}", resolved);
+
+    const Renderer renderer(assets->mesh, *assets->scene, assets->material, assets->settings);
+    ProgressReporter progress("render", assets->views.size());
+    for (std::size_t k = 0; k < assets->views.size(); ++k) {
+        const SceneView& view = assets->views[k];
+        const Light light = scene_light(description, view, k);
+        const Frame frame = renderer.render_ssaa(view.camera, view.ssaa, light, assets->passes);
+        const std::string stem = fmt::format("{}/view_{:03d}", o.output, k);
+        write_exr(stem + ".exr", frame.exr_layers(), o.half ? ExrPixelType::Half : ExrPixelType::Float);
+        if (o.png)
+            for (std::size_t p = 0; p < frame.passes.size(); ++p)
+                write_png(fmt::format("{}_{}.png", stem, pass_name(frame.passes[p])),
+                          preview_image(frame.passes[p], frame.images[p], frame.coverage));
+        log_verbose("view {}: {}", k, view.label);
+        progress.advance(1, view.label);
+    }
+    progress.finish();
+    log_info("wrote {} views to {}", assets->views.size(), o.output);
+    return 0;
+}
+
+}  // namespace
+
 Command register_render(CLI::App& root) {
+    auto options = std::make_shared<RenderOptions>();
     Command command;
-    command.app = root.add_subcommand("render", "(not implemented yet)");
-    command.run = [] {
-        std::fprintf(stderr, "tdf render: not implemented yet\n");
-        return 2;
-    };
+    CLI::App* app = root.add_subcommand(
+        "render", "render the passes of a scene file's views to multi-layer EXRs (view_000.exr, ...)");
+    app->add_option("scene", options->scene, "scene file (JSON, README \"Scene file format\")")->required();
+    app->add_option("overrides", options->overrides, "scene overrides key=value (dotted keys, e.g. image.width=256)");
+    app->add_option("-o,--output", options->output, "output folder")->required();
+    app->add_flag("--png", options->png, "also write 8-bit PNG previews view_NNN_<pass>.png")->capture_default_str();
+    app->add_flag("--half", options->half, "write half-float EXRs instead of float")->capture_default_str();
+    app->add_option("--turntable", options->turntable,
+                    "replace the scene's views by N azimuths 360k/N at views.turntable.elevation")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    command.app = app;
+    command.run = [options] { return run_render(*options); };
     return command;
 }
 

@@ -37,7 +37,6 @@ Camera Camera::orbit(float elevation_deg, float azimuth_deg, float radius, float
 }
 
 Camera Camera::look_at(Vec3f position, Vec3f target, Kind kind, int width, int height) {
-    TDF_CHECK(width > 0 && height > 0);
     Camera camera;
     camera.kind = kind;
     camera.width = width;

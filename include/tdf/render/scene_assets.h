@@ -1,0 +1,44 @@
+#pragma once
+/// Everything `tdf render` needs for a scene file: the loaded (and optionally normalised) mesh,
+/// its Embree scene, textures, material, render settings, passes, views and lights.
+#include <tdf/core/image.h>
+#include <tdf/render/renderer.h>
+#include <tdf/scene/scene_file.h>
+#include <tdf/scene/scene_views.h>
+
+#include <memory>
+#include <vector>
+
+namespace tdf {
+
+struct SceneAssets {
+    SceneDescription description;
+    TriangleMesh mesh;
+    std::unique_ptr<EmbreeScene> scene;
+    MipTexture albedo;   ///< empty unless the albedo source is a texture
+    MipTexture tactile;  ///< the first tactile image, decoded (empty without one)
+    MipTexture label;
+    SurfaceMaterial material;  ///< points into this object: SceneAssets is not copyable
+    RenderSettings settings;
+    std::vector<Pass> passes;
+    std::vector<SceneView> views;
+
+    SceneAssets() = default;
+    SceneAssets(const SceneAssets&) = delete;
+    SceneAssets& operator=(const SceneAssets&) = delete;
+};
+
+/// Loads the mesh and images a scene names. Albedo source "mesh" uses the mesh's texture, else
+/// its vertex colours, else constant grey 0.5 with a warning (the reference's fallback, spec
+/// 1.2). Throws tdf::Error naming the scene and the file on missing or bad input.
+std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& description);
+
+/// Decodes an 8-bit tangent-space normal map read as value/255 into [-1, 1]: x * 2 - 1, not
+/// renormalised (spec 1.3). Keeps the first 3 channels; needs at least 3.
+Image decode_normal_map(const Image& image, const std::string& source);
+
+/// The light of view `index` (LightSpec modes). magic3d draws from
+/// Rng::stream(seed, 0x4c49474854 + index) so lights and views have separate streams.
+Light scene_light(const SceneDescription& description, const SceneView& view, std::size_t index);
+
+}  // namespace tdf

@@ -1,0 +1,96 @@
+#pragma once
+/// Scene files: JSON describing a mesh, its materials, views, light and output passes, read by
+/// `tdf render` and shared with the optimizer (README "Scene file format" lists every key).
+///
+/// - Unknown keys are errors. The top-level sections "optimize", "tactile_layout", "guidance"
+///   and "export" belong to other modules: they are kept as raw JSON in `sections` for their
+///   owners to validate; any other unknown top-level key is rejected here.
+/// - `"parent": "base.json"` inherits keys from another file (objects merge, values replace).
+/// - `key=value` overrides (dotted paths, e.g. `image.width=256`) apply after inheritance.
+/// - Relative paths resolve against the folder of the scene file named on the command line
+///   (also for inherited keys and overrides); they may point outside the repository, e.g. into
+///   ../shared/data.
+#include <tdf/core/config.h>
+#include <tdf/core/vec.h>
+#include <tdf/mesh/triangle_mesh.h>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace tdf {
+
+/// One fixed orbit camera (spec 2.1); radius and fovy default to views.radius / views.fovy.
+struct OrbitViewSpec {
+    float elevation = 0;
+    float azimuth = 0;
+    float radius = 3;
+    float fovy = 50;
+};
+
+struct ViewsSpec {
+    float radius = 3.f;              ///< default orbit radius (vis_render.py: 3)
+    float fovy = 50.f;               ///< default vertical field of view, degrees (vis_render.py: 50)
+    Vec3f target{};                  ///< orbit centre
+    std::vector<OrbitViewSpec> orbit;  ///< explicit views, rendered first
+    int turntable_count = 0;         ///< N views at azimuth 360 k / N
+    float turntable_elevation = 0;
+    int random_count = 0;            ///< visual training views (spec 2.3), from `seed`
+    bool random_ssaa = false;        ///< give random views the reference's random SSAA factor
+    int patch_count = 0;             ///< tactile patch views (spec 2.4), from `seed`
+    bool patch_reference_flip = false;  ///< store patches upside down like the reference (13.13)
+};
+
+struct LightSpec {
+    /// "camera": directional, from the view's angles plus the relative offsets (vis_render.py
+    /// stills; patch views use the camera direction); "directional": fixed angles; "point":
+    /// fixed position; "magic3d": the training renderer's random point light (spec 3.4), one per
+    /// view from `seed`.
+    std::string mode = "camera";
+    float relative_elevation = 0;
+    float relative_azimuth = 0;
+    float elevation = 0;
+    float azimuth = 0;
+    Vec3f position{0, 0, 3};
+    float ambient = 0.1f;  ///< default by shading mode: training 0.5 (spec 3.4), visualizer 0.1 (3.9)
+};
+
+struct SceneDescription {
+    std::string path;         ///< the scene file
+    std::string mesh;         ///< resolved mesh path (.obj, .gltf, .glb, .ply)
+    bool normalize = false;   ///< centre and scale the largest side to 2 * normalize_bound (spec 3.9)
+    float normalize_bound = 0.9f;
+    TangentMode tangents = TangentMode::Handed;
+    std::string albedo_source = "mesh";  ///< mesh | image | vertex_colors | constant
+    std::string albedo_image;            ///< resolved path, for albedo_source "image"
+    Vec3f albedo_color{0.5f, 0.5f, 0.5f};  ///< for "constant"
+    std::vector<std::string> tactile_images;  ///< resolved paths; the first is rendered
+    std::string label_map;               ///< resolved path or empty
+    int width = 512;
+    int height = 512;
+    float ssaa = 1.f;
+    std::string shading = "visualizer";  ///< training | visualizer (checked by the renderer)
+    Vec3f background{1, 1, 1};
+    std::vector<std::string> passes = {"lambertian", "albedo", "mask"};  ///< checked by the renderer
+    std::uint64_t seed = 0;
+    ViewsSpec views;
+    LightSpec light;
+    /// Raw JSON of the sections owned by other modules (optimize, tactile_layout, guidance, export).
+    std::map<std::string, Json> sections;
+
+    /// Every setting with defaults filled in and paths resolved, plus the raw sections: what
+    /// `tdf render` writes to resolved_scene.json.
+    Json to_json() const;
+};
+
+/// The top-level sections kept raw for other modules.
+const std::vector<std::string>& foreign_scene_sections();
+
+/// Loads `path` with its parents, applies `overrides`, and validates it. Throws tdf::Error with
+/// one line naming the file and key on any problem.
+SceneDescription load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+/// Parses an already merged scene JSON; `path` names it in messages and anchors relative paths.
+SceneDescription parse_scene(const Json& json, const std::string& path);
+
+}  // namespace tdf

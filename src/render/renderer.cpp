@@ -1,0 +1,181 @@
+#include <tdf/render/renderer.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+#include <tdf/render/resample.h>
+#include <tdf/render/shading.h>
+#include <tdf/render/trace.h>
+#include <tdf/scene/view_sampler.h>
+
+#include <algorithm>
+#include <array>
+
+namespace tdf {
+
+const char* shading_mode_name(ShadingMode mode) {
+    return mode == ShadingMode::Training ? "training" : "visualizer";
+}
+
+ShadingMode parse_shading_mode(const std::string& name) {
+    if (name == "training") return ShadingMode::Training;
+    if (name == "visualizer") return ShadingMode::Visualizer;
+    throw_error("unknown shading mode '{}' (valid: training, visualizer)", name);
+}
+
+Renderer::Renderer(const TriangleMesh& mesh, const EmbreeScene& scene, const SurfaceMaterial& material,
+                   const RenderSettings& settings)
+    : m_mesh(mesh), m_scene(scene), m_material(material), m_settings(settings) {
+    using Source = SurfaceMaterial::AlbedoSource;
+    if (material.albedo_source == Source::Texture && (!material.albedo || material.albedo->empty()))
+        throw_error("{}: the albedo source is a texture but no texture was given", mesh.source_path);
+    if (material.albedo_source == Source::VertexColors && !mesh.has_colors())
+        throw_error("{}: the albedo source is vertex colours but the mesh has none", mesh.source_path);
+    const bool textured = material.albedo_source == Source::Texture || material.tactile || material.label;
+    if (textured && !mesh.has_uvs())
+        throw_error("{}: textures need UVs but the mesh has none", mesh.source_path);
+    if (material.tactile && material.tactile->channels() < 3)
+        throw_error("{}: the tactile normal map needs 3 channels, it has {}", mesh.source_path,
+                    material.tactile->channels());
+}
+
+namespace {
+
+// Per-pass output pointers, nullptr for passes not requested: the pixel loop writes straight
+// into the images without lookups or allocation.
+struct Targets {
+    std::array<float*, 11> base{};
+    std::array<int, 11> channels{};
+    float* coverage = nullptr;
+    float* at(Pass p, std::size_t pixel) const {
+        float* b = base[std::size_t(p)];
+        return b ? b + pixel * std::size_t(channels[std::size_t(p)]) : nullptr;
+    }
+};
+
+inline void put3(float* out, Vec3f v) {
+    out[0] = v.x;
+    out[1] = v.y;
+    out[2] = v.z;
+}
+
+// Samples a texture into a 3-vector: RGB, or grey for 1-2 channels.
+Vec3f sample_rgb(const MipTexture& tex, Vec2f uv, Vec2f dx, Vec2f dy, bool mipmapped, int max_level) {
+    float texel[kMaxTextureChannels];
+    if (mipmapped)
+        tex.sample_trilinear(uv, dx, dy, texel, max_level);
+    else
+        tex.sample_bilinear(uv, texel);
+    return tex.channels() >= 3 ? Vec3f{texel[0], texel[1], texel[2]} : Vec3f{texel[0], texel[0], texel[0]};
+}
+
+}  // namespace
+
+Frame Renderer::render(const Camera& camera, const Light& light, const std::vector<Pass>& passes) const {
+    if (camera.width <= 0 || camera.height <= 0)
+        throw_error("image size {}x{} is empty (width and height must be positive)", camera.width, camera.height);
+    Frame frame;
+    frame.passes = passes;
+    Targets targets;
+    frame.images.reserve(passes.size());  // the pointers below must stay valid
+    for (Pass p : passes) {
+        if (targets.base[std::size_t(p)]) throw_error("pass '{}' is requested twice", pass_name(p));
+        frame.images.emplace_back(camera.width, camera.height, pass_channels(p));
+        targets.base[std::size_t(p)] = frame.images.back().data();
+        targets.channels[std::size_t(p)] = pass_channels(p);
+    }
+    frame.coverage = Image(camera.width, camera.height, 1);
+    targets.coverage = frame.coverage.data();
+
+    const bool training = m_settings.shading == ShadingMode::Training;
+    const int tactile_max_level = training ? -1 : 5;  // spec 3.9: max_mip_level = 5
+    const bool albedo_mipmapped = training;           // visualizer: plain bilinear
+    using Source = SurfaceMaterial::AlbedoSource;
+    const SurfaceMaterial& mat = m_material;
+    const bool need_frame = targets.base[std::size_t(Pass::Lambertian)] ||
+                            targets.base[std::size_t(Pass::ShadingNormal)] ||
+                            targets.base[std::size_t(Pass::ShadingNormalViewspace)] ||
+                            targets.base[std::size_t(Pass::TactileNormal)];
+    const bool need_albedo = targets.base[std::size_t(Pass::Albedo)] || targets.base[std::size_t(Pass::Lambertian)];
+
+    GBuffer g;
+    g.resize(camera.width, camera.height);
+    parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
+        trace_gbuffer_tile(m_scene, m_mesh, camera, x0, y0, x1, y1, g);
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const std::size_t i = g.index(x, y);
+                const bool hit = g.mask[i] > 0.f;
+                targets.coverage[i] = g.mask[i];
+                if (float* o = targets.at(Pass::Mask, i)) o[0] = g.mask[i];
+                if (float* o = targets.at(Pass::Depth, i)) o[0] = g.depth[i];
+                if (float* o = targets.at(Pass::Normal, i)) put3(o, g.normal[i]);
+                if (float* o = targets.at(Pass::Tangent, i)) put3(o, g.tangent[i]);
+                if (float* o = targets.at(Pass::Uv, i)) {
+                    o[0] = hit ? g.uv[i].x : 0.f;
+                    o[1] = hit ? 1.f - g.uv[i].y : 0.f;  // the reference's v' (spec 3.9)
+                }
+                if (float* o = targets.at(Pass::Label, i))
+                    put3(o, hit && mat.label ? sample_rgb(*mat.label, g.uv[i], g.duv_dx[i], g.duv_dy[i], true,
+                                                          tactile_max_level)
+                                             : Vec3f{});
+                Vec3f albedo = m_settings.background;
+                if (need_albedo && hit) {
+                    if (mat.albedo_source == Source::Texture)
+                        albedo = sample_rgb(*mat.albedo, g.uv[i], g.duv_dx[i], g.duv_dy[i], albedo_mipmapped, -1);
+                    else if (mat.albedo_source == Source::VertexColors) {
+                        const Vec3i& t = m_mesh.triangles[std::size_t(g.triangle[i])];
+                        const Vec2f b = g.barycentric[i];
+                        albedo = m_mesh.colors[std::size_t(t.x)] * (1.f - b.x - b.y) +
+                                 m_mesh.colors[std::size_t(t.y)] * b.x + m_mesh.colors[std::size_t(t.z)] * b.y;
+                    } else
+                        albedo = mat.albedo_constant;
+                }
+                if (float* o = targets.at(Pass::Albedo, i)) put3(o, albedo);
+                if (!need_frame) continue;
+                if (!hit) {
+                    for (Pass p : {Pass::TactileNormal, Pass::ShadingNormal, Pass::ShadingNormalViewspace})
+                        if (float* o = targets.at(p, i)) put3(o, {});
+                    if (float* o = targets.at(Pass::Lambertian, i)) put3(o, m_settings.background);
+                    continue;
+                }
+                Vec3f p{0, 0, 1};
+                if (mat.tactile) {
+                    float texel[kMaxTextureChannels];
+                    mat.tactile->sample_trilinear(g.uv[i], g.duv_dx[i], g.duv_dy[i], texel, tactile_max_level);
+                    p = {texel[0], texel[1], texel[2]};
+                    if (training) p = safe_normalize(p);  // spec 3.1 step 5
+                }
+                if (float* o = targets.at(Pass::TactileNormal, i)) put3(o, p);
+                const Vec3f raw = shading_normal_unnormalized(g.tangent[i], g.normal[i], g.handedness[i], p);
+                const Vec3f n = safe_normalize(raw);
+                if (float* o = targets.at(Pass::ShadingNormal, i)) put3(o, n);
+                if (float* o = targets.at(Pass::ShadingNormalViewspace, i))
+                    put3(o, training ? normalize_or_zero(camera.world_to_camera_direction(n))
+                                     : camera.world_to_camera_direction(raw));
+                if (float* o = targets.at(Pass::Lambertian, i)) {
+                    const Vec3f l = light.kind == Light::Kind::Point ? safe_normalize(light.vector - g.position[i])
+                                                                    : light.vector;
+                    const float shade = light.ambient + (1.f - light.ambient) * std::max(0.f, dot(n, l));
+                    const Vec3f c = albedo * shade;
+                    put3(o, {std::clamp(c.x, 0.f, 1.f), std::clamp(c.y, 0.f, 1.f), std::clamp(c.z, 0.f, 1.f)});
+                }
+            }
+    });
+    m_scene.throw_if_error("rendering");
+    return frame;
+}
+
+Frame Renderer::render_ssaa(const Camera& camera, float ssaa, const Light& light,
+                            const std::vector<Pass>& passes) const {
+    if (!(ssaa >= 1.f) || ssaa > 8.f) throw_error("SSAA factor {} is outside [1, 8]", ssaa);
+    if (ssaa == 1.f) return render(camera, light, passes);
+    Camera internal = camera;
+    internal.width = ssaa_internal_resolution(camera.width, ssaa);
+    internal.height = ssaa_internal_resolution(camera.height, ssaa);
+    Frame frame = render(internal, light, passes);
+    for (Image& image : frame.images) image = downsample_bilinear(image, camera.width, camera.height);
+    frame.coverage = downsample_bilinear(frame.coverage, camera.width, camera.height);
+    return frame;
+}
+
+}  // namespace tdf

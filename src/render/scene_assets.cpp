@@ -1,0 +1,118 @@
+#include <tdf/render/scene_assets.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/log.h>
+#include <tdf/io/image_io.h>
+#include <tdf/mesh/mesh_io.h>
+#include <tdf/render/shading.h>
+
+#include <filesystem>
+
+namespace tdf {
+
+Image decode_normal_map(const Image& image, const std::string& source) {
+    if (image.channels() < 3)
+        throw_error("{}: a normal map needs 3 channels (RGB), this image has {}", source, image.channels());
+    Image out = image.channel_range(0, 3);
+    for (float& v : out.values()) v = v * 2.f - 1.f;
+    return out;
+}
+
+namespace {
+Image read_checked(const std::string& path, const std::string& scene, const char* what) {
+    if (!std::filesystem::exists(path)) throw_error("{}: {} '{}' does not exist", scene, what, path);
+    Image image = read_image(path);
+    if (!image.all_finite()) throw_error("{}: {} '{}' contains NaN or infinite values", scene, what, path);
+    return image;
+}
+}  // namespace
+
+std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
+    auto assets = std::make_unique<SceneAssets>();
+    assets->description = d;
+    MeshLoadOptions options;
+    options.tangent_mode = d.tangents;
+    options.load_textures = d.albedo_source == "mesh";
+    if (!std::filesystem::exists(d.mesh)) throw_error("{}: mesh '{}' does not exist", d.path, d.mesh);
+    assets->mesh = load_mesh(d.mesh, options);
+    if (d.normalize) normalize_mesh(assets->mesh, d.normalize_bound);
+    assets->scene = std::make_unique<EmbreeScene>(assets->mesh);
+
+    using Source = SurfaceMaterial::AlbedoSource;
+    SurfaceMaterial& m = assets->material;
+    m.albedo_constant = d.albedo_color;
+    if (d.albedo_source == "mesh") {
+        if (!assets->mesh.albedo.empty() && assets->mesh.has_uvs()) {
+            assets->albedo = MipTexture(assets->mesh.albedo);
+            m.albedo_source = Source::Texture;
+        } else if (assets->mesh.has_colors()) {
+            m.albedo_source = Source::VertexColors;
+        } else {
+            log_warning("{}: mesh '{}' has no albedo texture or vertex colours; using grey 0.5", d.path, d.mesh);
+            m.albedo_source = Source::Constant;
+            m.albedo_constant = {0.5f, 0.5f, 0.5f};
+        }
+    } else if (d.albedo_source == "image") {
+        assets->albedo = MipTexture(read_checked(d.albedo_image, d.path, "albedo image"));
+        m.albedo_source = Source::Texture;
+    } else if (d.albedo_source == "vertex_colors") {
+        m.albedo_source = Source::VertexColors;
+    } else {
+        m.albedo_source = Source::Constant;
+    }
+    if (m.albedo_source == Source::Texture) m.albedo = &assets->albedo;
+    if (!d.tactile_images.empty()) {
+        const std::string& path = d.tactile_images.front();
+        assets->tactile = MipTexture(decode_normal_map(read_checked(path, d.path, "tactile image"), path));
+        m.tactile = &assets->tactile;
+        if (d.tactile_images.size() > 1)
+            log_info("{}: rendering the first of {} tactile images", d.path, d.tactile_images.size());
+    }
+    if (!d.label_map.empty()) {
+        assets->label = MipTexture(read_checked(d.label_map, d.path, "label map"));
+        m.label = &assets->label;
+    }
+    assets->settings.shading = parse_shading_mode(d.shading);
+    assets->settings.background = d.background;
+    for (const auto& name : d.passes) {
+        try {
+            assets->passes.push_back(parse_pass(name));
+        } catch (const Error& e) {
+            throw_error("{}: passes: {}", d.path, e.what());
+        }
+    }
+    try {
+        // Validates the material against the mesh (UVs, vertex colours) before any view renders.
+        Renderer check(assets->mesh, *assets->scene, m, assets->settings);
+    } catch (const Error& e) {
+        throw_error("{}: {}", d.path, e.what());
+    }
+    assets->views = make_scene_views(d, assets->mesh);
+    return assets;
+}
+
+Light scene_light(const SceneDescription& d, const SceneView& view, std::size_t index) {
+    const LightSpec& spec = d.light;
+    Light light;
+    light.ambient = spec.ambient;
+    if (spec.mode == "camera") {
+        light.kind = Light::Kind::Directional;
+        light.vector = view.has_angles
+                           ? orbit_direction(view.elevation + spec.relative_elevation, view.azimuth + spec.relative_azimuth)
+                           : view.camera.back;
+    } else if (spec.mode == "directional") {
+        light.kind = Light::Kind::Directional;
+        light.vector = orbit_direction(spec.elevation, spec.azimuth);
+    } else if (spec.mode == "point") {
+        light.kind = Light::Kind::Point;
+        light.vector = spec.position;
+    } else {
+        TDF_CHECK(spec.mode == "magic3d");
+        Rng rng = Rng::stream(d.seed, 0x4c49474854ull + index);
+        light.kind = Light::Kind::Point;
+        light.vector = sample_magic3d_light(rng, view.camera.position);
+    }
+    return light;
+}
+
+}  // namespace tdf

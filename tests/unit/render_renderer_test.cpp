@@ -1,0 +1,128 @@
+#include <tdf/core/error.h>
+#include <tdf/render/renderer.h>
+#include <tdf/render/shading.h>
+#include <tdf/render/trace.h>
+#include <tdf/scene/procedural_mesh.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace tdf;
+
+namespace {
+const std::vector<Pass> kAll = {Pass::Albedo,        Pass::Lambertian,    Pass::Mask,
+                                Pass::Depth,         Pass::Normal,        Pass::Tangent,
+                                Pass::Uv,            Pass::TactileNormal, Pass::ShadingNormal,
+                                Pass::ShadingNormalViewspace, Pass::Label};
+}
+
+TEST(Renderer, QuadUnderAPointLightGivesClosedFormLambertian) {
+    const TriangleMesh quad = make_quad(1.f);
+    const EmbreeScene scene(quad);
+    SurfaceMaterial material;
+    material.albedo_constant = {0.8f, 0.4f, 0.2f};
+    const Renderer renderer(quad, scene, material);
+    const Camera cam = Camera::orbit(0, 0, 2, 90, 64, 64);
+    const Light light{Light::Kind::Point, {0.5f, -0.3f, 1.2f}, 0.5f};
+    const Frame frame = renderer.render(cam, light, kAll);
+    const Image& lambert = *frame.find(Pass::Lambertian);
+    const GBuffer g = trace_gbuffer(scene, quad, cam);
+    double max_error = 0;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const std::size_t i = g.index(x, y);
+            if (!g.mask[i]) {
+                EXPECT_EQ(lambert.at(x, y, 0), 1.f);  // white background
+                continue;
+            }
+            // Spec 3.4: c (0.5 max(0, n.l) + 0.5), n = +Z, l = normalize(L - p).
+            const Vec3f l = safe_normalize(light.vector - g.position[i]);
+            const float shade = 0.5f * std::max(0.f, l.z) + 0.5f;
+            for (int k = 0; k < 3; ++k)
+                max_error = std::max(max_error, double(std::fabs(lambert.at(x, y, k) - material.albedo_constant[k] * shade)));
+        }
+    EXPECT_LT(max_error, 1e-6);
+    // Flat tactile map: the shading normal is the geometric normal, in view space +Z.
+    const Image& view = *frame.find(Pass::ShadingNormalViewspace);
+    EXPECT_NEAR(view.at(32, 32, 2), 1.f, 1e-6f);
+    EXPECT_EQ(view.at(1, 1, 2), 0.f);
+    EXPECT_EQ(frame.find(Pass::Label)->at(32, 32, 0), 0.f);
+    EXPECT_NEAR(frame.find(Pass::Uv)->at(40, 20, 1), 1.f - g.uv[g.index(40, 20)].y, 1e-6f);
+}
+
+TEST(Renderer, SphereUnderADirectionalLightMatchesCosineLaw) {
+    const TriangleMesh sphere = make_uv_sphere(1.f, 256, 128);
+    const EmbreeScene scene(sphere);
+    SurfaceMaterial material;
+    material.albedo_constant = {1, 1, 1};
+    RenderSettings settings;
+    settings.shading = ShadingMode::Visualizer;
+    const Renderer renderer(sphere, scene, material, settings);
+    const Camera cam = Camera::orbit(0, 0, 3, 50, 96, 96);
+    const Vec3f l = orbit_direction(0, 0);  // light from the camera
+    const Frame frame = renderer.render(cam, {Light::Kind::Directional, l, 0.1f}, {Pass::Lambertian, Pass::Normal});
+    const GBuffer g = trace_gbuffer(scene, sphere, cam);
+    double max_error = 0;
+    for (std::size_t i = 0; i < g.pixel_count(); ++i) {
+        if (!g.mask[i]) continue;
+        // Closed form on the exact sphere: n = p / |p|. Faceting makes the interpolated normal
+        // differ by O(1/segments^2).
+        const Vec3f n = safe_normalize(g.position[i]);
+        const float expect = 0.1f + 0.9f * std::max(0.f, dot(n, l));
+        max_error = std::max(max_error, double(std::fabs(frame.find(Pass::Lambertian)->data()[3 * i] - expect)));
+    }
+    EXPECT_LT(max_error, 2e-3);
+}
+
+TEST(Renderer, SsaaResizesEveryPassAndMakesCoverageFractional) {
+    const TriangleMesh sphere = make_uv_sphere(1.f, 32, 16);
+    const EmbreeScene scene(sphere);
+    const Renderer renderer(sphere, scene, SurfaceMaterial{});
+    const Camera cam = Camera::orbit(0, 0, 3, 49.1f, 50, 40);
+    const Frame frame = renderer.render_ssaa(cam, 1.5f, Light{}, {Pass::Mask, Pass::Albedo});
+    ASSERT_EQ(frame.images[0].width(), 50);
+    ASSERT_EQ(frame.images[1].height(), 40);
+    bool fractional = false;
+    for (float m : frame.images[0].values()) fractional |= m > 0.f && m < 1.f;
+    EXPECT_TRUE(fractional);
+}
+
+TEST(Renderer, HandedTangentsFlipTheGreenChannelOnMirroredCharts) {
+    // A quad with u mirrored: T = -X, w = -1. A map tilting toward +v (green up) must tilt the
+    // shading normal toward +Y in both cases; the reference (w discarded) tilts it to -Y.
+    TriangleMesh mirrored = make_quad(1.f);
+    for (Vec2f& uv : mirrored.uvs) uv.x = 1.f - uv.x;
+    compute_tangents(mirrored, TangentMode::Handed);
+    Image map(4, 4, 3);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) {
+            map.at(x, y, 0) = 0.f;
+            map.at(x, y, 1) = 0.6f;
+            map.at(x, y, 2) = 0.8f;
+        }
+    const MipTexture tactile(map);
+    SurfaceMaterial material;
+    material.tactile = &tactile;
+    const Camera cam = Camera::orbit(0, 0, 2, 90, 16, 16);
+    const EmbreeScene scene(mirrored);
+    const Frame handed = Renderer(mirrored, scene, material).render(cam, Light{}, {Pass::ShadingNormal});
+    EXPECT_NEAR(handed.images[0].at(8, 8, 1), 0.6f, 1e-5f);
+    compute_tangents(mirrored, TangentMode::Reference);
+    const Frame reference = Renderer(mirrored, scene, material).render(cam, Light{}, {Pass::ShadingNormal});
+    EXPECT_NEAR(reference.images[0].at(8, 8, 1), -0.6f, 1e-5f);
+}
+
+TEST(Renderer, BadInputIsAnError) {
+    const TriangleMesh quad = make_quad(1.f);
+    const EmbreeScene scene(quad);
+    SurfaceMaterial material;
+    material.albedo_source = SurfaceMaterial::AlbedoSource::VertexColors;
+    EXPECT_THROW(Renderer(quad, scene, material), Error);
+    const Renderer ok(quad, scene, SurfaceMaterial{});
+    Camera cam = Camera::orbit(0, 0, 2, 49.1f, 0, 16);
+    cam.width = 0;
+    EXPECT_THROW(ok.render(cam, Light{}, {Pass::Mask}), Error);
+    EXPECT_THROW(ok.render(Camera::orbit(0, 0, 2, 49.1f, 8, 8), Light{}, {Pass::Mask, Pass::Mask}), Error);
+    EXPECT_THROW(parse_pass("albdo"), Error);
+}
