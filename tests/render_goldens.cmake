@@ -2,7 +2,8 @@
 # by `tdf render` and compared with `tdf compare` under the case's tolerances.
 #   ctest --test-dir build -L render                              run it
 #   TDF_UPDATE_REFERENCES=1 ctest --test-dir build -L render      rewrite the goldens on purpose
-# Also builds and checks the generator of the shipped pebble_sphere assets.
+# Also builds and checks the generator of the shipped pebble_sphere assets, and runs the CLI
+# end-to-end checks (tests/render/cli_checks.cmake).
 
 add_executable(tdf_make_pebble_sphere ${PROJECT_SOURCE_DIR}/tools/make_pebble_sphere.cpp)
 target_link_libraries(tdf_make_pebble_sphere PRIVATE tdf_render tdf_warnings)
@@ -17,6 +18,11 @@ foreach(_case_file ${_golden_cases})
   add_test(NAME RenderGolden.${_case}
            COMMAND ${CMAKE_COMMAND} -DTDF=$<TARGET_FILE:tdf> -DCASE_DIR=${_case_dir}
                    -DSOURCE_DIR=${PROJECT_SOURCE_DIR} -DOUT_DIR=${PROJECT_BINARY_DIR}/test-output/golden/${_case}
-                   -P ${PROJECT_SOURCE_DIR}/tests/render_golden_case.cmake)
+                   -P ${PROJECT_SOURCE_DIR}/tests/render/golden_case.cmake)
   set_tests_properties(RenderGolden.${_case} PROPERTIES LABELS "render")
 endforeach()
+
+add_test(NAME RenderCli.ExitCodesAndOutputs
+         COMMAND ${CMAKE_COMMAND} -DTDF=$<TARGET_FILE:tdf> -DSOURCE_DIR=${PROJECT_SOURCE_DIR}
+                 -DOUT_DIR=${PROJECT_BINARY_DIR}/test-output/cli -P ${PROJECT_SOURCE_DIR}/tests/render/cli_checks.cmake)
+set_tests_properties(RenderCli.ExitCodesAndOutputs PROPERTIES LABELS "render")

@@ -19,7 +19,6 @@ struct RenderOptions {
     std::string output;
     std::vector<std::string> overrides;
     bool png = false;
-    bool half = false;
     int turntable = 0;
 };
 
@@ -32,9 +31,9 @@ int run_render(const RenderOptions& o) {
         overrides.push_back(fmt::format("views.turntable.count={}", o.turntable));
     }
     const SceneDescription description = load_scene(o.scene, overrides);
+    const auto assets = load_scene_assets(description);
     log_info("scene {}: seed {}, {}x{}, ssaa {}, {} shading", o.scene, description.seed, description.width,
              description.height, description.ssaa, description.shading);
-    const auto assets = load_scene_assets(description);
     log_info("mesh {}: {} vertices, {} triangles; {} views", description.mesh, assets->mesh.positions.size(),
              assets->mesh.triangles.size(), assets->views.size());
     ensure_folder(o.output);
@@ -49,7 +48,7 @@ int run_render(const RenderOptions& o) {
         const Light light = scene_light(description, view, k);
         const Frame frame = renderer.render_ssaa(view.camera, view.ssaa, light, assets->passes);
         const std::string stem = fmt::format("{}/view_{:03d}", o.output, k);
-        write_exr(stem + ".exr", frame.exr_layers(), o.half ? ExrPixelType::Half : ExrPixelType::Float);
+        write_exr(stem + ".exr", frame.exr_layers());
         if (o.png)
             for (std::size_t p = 0; p < frame.passes.size(); ++p)
                 write_png(fmt::format("{}_{}.png", stem, pass_name(frame.passes[p])),
@@ -73,7 +72,6 @@ Command register_render(CLI::App& root) {
     app->add_option("overrides", options->overrides, "scene overrides key=value (dotted keys, e.g. image.width=256)");
     app->add_option("-o,--output", options->output, "output folder")->required();
     app->add_flag("--png", options->png, "also write 8-bit PNG previews view_NNN_<pass>.png")->capture_default_str();
-    app->add_flag("--half", options->half, "write half-float EXRs instead of float")->capture_default_str();
     app->add_option("--turntable", options->turntable,
                     "replace the scene's views by N azimuths 360k/N at views.turntable.elevation")
         ->check(CLI::NonNegativeNumber)

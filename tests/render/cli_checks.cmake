@@ -1,0 +1,54 @@
+# End-to-end checks of `tdf render` and `tdf compare` (exit codes, one-line errors, outputs).
+# Run by ctest with -DTDF -DSOURCE_DIR -DOUT_DIR.
+cmake_minimum_required(VERSION 3.20)
+set(_scene ${SOURCE_DIR}/scenes/pebble_sphere/scene.json)
+file(REMOVE_RECURSE ${OUT_DIR})
+
+# expect(<exit code> <stderr regex or ""> <command...>)
+function(expect code regex)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL code)
+    message(FATAL_ERROR "expected exit ${code}, got ${rc}: ${ARGN}\nstdout: ${out}\nstderr: ${err}")
+  endif()
+  if(regex)
+    string(STRIP "${err}" err)
+    if(NOT err MATCHES "${regex}")
+      message(FATAL_ERROR "stderr of ${ARGN} does not match '${regex}':\n${err}")
+    endif()
+    if(err MATCHES "\n")
+      message(FATAL_ERROR "error of ${ARGN} is more than one line:\n${err}")
+    endif()
+  endif()
+endfunction()
+
+# Bad input: one line "tdf render: ...", exit 1.
+expect(1 "^tdf render: .*unknown pass 'glossy'" ${TDF} render ${_scene} -o ${OUT_DIR}/bad "passes=[\"glossy\"]")
+expect(1 "^tdf render: .*image size 0x" ${TDF} render ${_scene} -o ${OUT_DIR}/bad image.width=0)
+expect(1 "^tdf render: .*nothere.json" ${TDF} render ${OUT_DIR}/nothere.json -o ${OUT_DIR}/bad)
+expect(1 "^tdf render: .*missing.obj" ${TDF} render ${_scene} -o ${OUT_DIR}/bad mesh=missing.obj)
+expect(1 "^tdf render: .*unknown key" ${TDF} render ${_scene} -o ${OUT_DIR}/bad colour=red)
+
+# Turntable: N views plus the resolved scene.
+expect(0 "" ${TDF} -q render ${_scene} -o ${OUT_DIR}/turn --turntable 3 image.width=32 image.height=24 --png)
+foreach(_f view_000.exr view_001.exr view_002.exr resolved_scene.json view_002_lambertian.png)
+  if(NOT EXISTS ${OUT_DIR}/turn/${_f})
+    message(FATAL_ERROR "tdf render --turntable 3 did not write ${_f}")
+  endif()
+endforeach()
+if(EXISTS ${OUT_DIR}/turn/view_003.exr)
+  message(FATAL_ERROR "--turntable 3 wrote a fourth view")
+endif()
+# The resolved scene renders the same images again.
+expect(0 "" ${TDF} -q render ${OUT_DIR}/turn/resolved_scene.json -o ${OUT_DIR}/again)
+
+# compare: 0 pass, 1 fail, 2 size mismatch, 1 unreadable.
+expect(0 "" ${TDF} compare ${OUT_DIR}/turn/view_001.exr ${OUT_DIR}/again/view_001.exr)
+expect(1 "" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --diff ${OUT_DIR}/diff.exr)
+if(NOT EXISTS ${OUT_DIR}/diff.exr)
+  message(FATAL_ERROR "tdf compare --diff did not write the difference image")
+endif()
+expect(0 "" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --fail 2 --hardfail 10)
+expect(0 "" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --failpercent 100)
+expect(0 "" ${TDF} -q render ${_scene} -o ${OUT_DIR}/big image.width=40 image.height=24)
+expect(2 "is 32x24 but" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/big/view_000.exr)
+expect(1 "^tdf compare: .*absent.exr" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/absent.exr)
