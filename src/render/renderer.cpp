@@ -71,19 +71,30 @@ Vec3f sample_rgb(const MipTexture& tex, Vec2f uv, Vec2f dx, Vec2f dy, bool mipma
 }  // namespace
 
 Frame Renderer::render(const Camera& camera, const Light& light, const std::vector<Pass>& passes) const {
+    Frame frame;
+    render(camera, light, passes, frame);
+    return frame;
+}
+
+void Renderer::render(const Camera& camera, const Light& light, const std::vector<Pass>& passes, Frame& frame) const {
     if (camera.width <= 0 || camera.height <= 0)
         throw_error("image size {}x{} is empty (width and height must be positive)", camera.width, camera.height);
-    Frame frame;
-    frame.passes = passes;
+    // Reuse the frame's images when the layout matches: every pixel is overwritten below.
+    const bool reuse = frame.passes == passes && frame.coverage.width() == camera.width &&
+                       frame.coverage.height() == camera.height;
+    if (!reuse) {
+        frame.passes = passes;
+        frame.images.clear();
+        frame.coverage = Image(camera.width, camera.height, 1);
+    }
     Targets targets;
-    frame.images.reserve(passes.size());  // the pointers below must stay valid
-    for (Pass p : passes) {
+    for (std::size_t k = 0; k < passes.size(); ++k) {
+        const Pass p = passes[k];
         if (targets.base[std::size_t(p)]) throw_error("pass '{}' is requested twice", pass_name(p));
-        frame.images.emplace_back(camera.width, camera.height, pass_channels(p));
-        targets.base[std::size_t(p)] = frame.images.back().data();
+        if (!reuse) frame.images.emplace_back(camera.width, camera.height, pass_channels(p));
+        targets.base[std::size_t(p)] = frame.images[k].data();
         targets.channels[std::size_t(p)] = pass_channels(p);
     }
-    frame.coverage = Image(camera.width, camera.height, 1);
     targets.coverage = frame.coverage.data();
 
     const bool training = m_settings.shading == ShadingMode::Training;
@@ -97,24 +108,25 @@ Frame Renderer::render(const Camera& camera, const Light& light, const std::vect
                             targets.base[std::size_t(Pass::TactileNormal)];
     const bool need_albedo = targets.base[std::size_t(Pass::Albedo)] || targets.base[std::size_t(Pass::Lambertian)];
 
-    GBuffer g;
-    g.resize(camera.width, camera.height);
     parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
-        trace_gbuffer_tile(m_scene, m_mesh, camera, x0, y0, x1, y1, g);
+        // One small G-buffer per thread, reused across tiles and frames: stays in cache.
+        static thread_local GBuffer g;
+        trace_tile(m_scene, m_mesh, camera, x0, y0, x1, y1, g);
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
-                const std::size_t i = g.index(x, y);
+                const std::size_t i = g.index(x - x0, y - y0);
+                const std::size_t px = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
                 const bool hit = g.mask[i] > 0.f;
-                targets.coverage[i] = g.mask[i];
-                if (float* o = targets.at(Pass::Mask, i)) o[0] = g.mask[i];
-                if (float* o = targets.at(Pass::Depth, i)) o[0] = g.depth[i];
-                if (float* o = targets.at(Pass::Normal, i)) put3(o, g.normal[i]);
-                if (float* o = targets.at(Pass::Tangent, i)) put3(o, g.tangent[i]);
-                if (float* o = targets.at(Pass::Uv, i)) {
+                targets.coverage[px] = g.mask[i];
+                if (float* o = targets.at(Pass::Mask, px)) o[0] = g.mask[i];
+                if (float* o = targets.at(Pass::Depth, px)) o[0] = g.depth[i];
+                if (float* o = targets.at(Pass::Normal, px)) put3(o, g.normal[i]);
+                if (float* o = targets.at(Pass::Tangent, px)) put3(o, g.tangent[i]);
+                if (float* o = targets.at(Pass::Uv, px)) {
                     o[0] = hit ? g.uv[i].x : 0.f;
                     o[1] = hit ? 1.f - g.uv[i].y : 0.f;  // the reference's v' (spec 3.9)
                 }
-                if (float* o = targets.at(Pass::Label, i))
+                if (float* o = targets.at(Pass::Label, px))
                     put3(o, hit && mat.label ? sample_rgb(*mat.label, g.uv[i], g.duv_dx[i], g.duv_dy[i], true,
                                                           tactile_max_level)
                                              : Vec3f{});
@@ -130,12 +142,12 @@ Frame Renderer::render(const Camera& camera, const Light& light, const std::vect
                     } else
                         albedo = mat.albedo_constant;
                 }
-                if (float* o = targets.at(Pass::Albedo, i)) put3(o, albedo);
+                if (float* o = targets.at(Pass::Albedo, px)) put3(o, albedo);
                 if (!need_frame) continue;
                 if (!hit) {
                     for (Pass p : {Pass::TactileNormal, Pass::ShadingNormal, Pass::ShadingNormalViewspace})
-                        if (float* o = targets.at(p, i)) put3(o, {});
-                    if (float* o = targets.at(Pass::Lambertian, i)) put3(o, m_settings.background);
+                        if (float* o = targets.at(p, px)) put3(o, {});
+                    if (float* o = targets.at(Pass::Lambertian, px)) put3(o, m_settings.background);
                     continue;
                 }
                 Vec3f p{0, 0, 1};
@@ -145,14 +157,14 @@ Frame Renderer::render(const Camera& camera, const Light& light, const std::vect
                     p = {texel[0], texel[1], texel[2]};
                     if (training) p = safe_normalize(p);  // spec 3.1 step 5
                 }
-                if (float* o = targets.at(Pass::TactileNormal, i)) put3(o, p);
+                if (float* o = targets.at(Pass::TactileNormal, px)) put3(o, p);
                 const Vec3f raw = shading_normal_unnormalized(g.tangent[i], g.normal[i], g.handedness[i], p);
                 const Vec3f n = safe_normalize(raw);
-                if (float* o = targets.at(Pass::ShadingNormal, i)) put3(o, n);
-                if (float* o = targets.at(Pass::ShadingNormalViewspace, i))
+                if (float* o = targets.at(Pass::ShadingNormal, px)) put3(o, n);
+                if (float* o = targets.at(Pass::ShadingNormalViewspace, px))
                     put3(o, training ? normalize_or_zero(camera.world_to_camera_direction(n))
                                      : camera.world_to_camera_direction(raw));
-                if (float* o = targets.at(Pass::Lambertian, i)) {
+                if (float* o = targets.at(Pass::Lambertian, px)) {
                     const Vec3f l = light.kind == Light::Kind::Point ? safe_normalize(light.vector - g.position[i])
                                                                     : light.vector;
                     const float shade = light.ambient + (1.f - light.ambient) * std::max(0.f, dot(n, l));
@@ -162,7 +174,6 @@ Frame Renderer::render(const Camera& camera, const Light& light, const std::vect
             }
     });
     m_scene.throw_if_error("rendering");
-    return frame;
 }
 
 Frame Renderer::render_ssaa(const Camera& camera, float ssaa, const Light& light,

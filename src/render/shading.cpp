@@ -4,16 +4,6 @@
 
 namespace tdf {
 
-Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {
-    // -B = -normalize(T x N) = normalize(N x T).
-    const Vec3f bitangent = safe_normalize(cross(N, T)) * w;
-    return T * p.x + bitangent * p.y + N * p.z;
-}
-
-Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f p) {
-    return safe_normalize(shading_normal_unnormalized(T, N, w, p));
-}
-
 Vec3f sample_magic3d_light(Rng& rng, Vec3f camera_position) {
     const float phi = rng.uniform(-kPi, kPi);
     const float theta = rng.uniform(kPi / 6.f, kPi / 2.f);

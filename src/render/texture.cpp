@@ -41,8 +41,17 @@ BoxTaps box_taps(int src, int dst) {
 }
 
 inline int wrap(int i, int n) {
+    if ((n & (n - 1)) == 0) return i & (n - 1);  // power of two (two's complement handles i < 0)
     const int r = i % n;
     return r < 0 ? r + n : r;
+}
+
+// The texel column/row of floor(coordinate) with wrap addressing. Huge or non-finite UVs take
+// a slow path so the int conversion never overflows.
+inline int wrap_floor(float floored, int n) {
+    if (std::fabs(floored) < 1e9f) return wrap(int(floored), n);
+    if (!std::isfinite(floored)) return 0;
+    return wrap(int(std::fmod(floored, float(n))), n);
 }
 
 }  // namespace
@@ -78,6 +87,17 @@ MipTexture::MipTexture(const Image& image) {
         m_levels.push_back(downsample_box(m_levels.back()));
 }
 
+namespace {
+// The four taps blended; C > 0 fixes the channel count at compile time for the common cases.
+template <int C>
+inline void blend(const float* p00, const float* p10, const float* p01, const float* p11, float ax, float ay,
+                  int channels, float* out) {
+    const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+    const int c = C > 0 ? C : channels;
+    for (int k = 0; k < c; ++k) out[k] = w00 * p00[k] + w10 * p10[k] + w01 * p01[k] + w11 * p11[k];
+}
+}  // namespace
+
 void MipTexture::sample_level(int level, Vec2f uv, float* out) const {
     const Image& img = m_levels[std::size_t(level)];
     const int w = img.width(), h = img.height(), c = img.channels();
@@ -85,15 +105,17 @@ void MipTexture::sample_level(int level, Vec2f uv, float* out) const {
     const float y = (1.f - uv.y) * float(h) - 0.5f;
     const float fx0 = std::floor(x), fy0 = std::floor(y);
     const float ax = x - fx0, ay = y - fy0;
-    // Wrap in float first so huge UVs do not overflow the int conversion.
-    const int x0 = wrap(int(std::fmod(fx0, float(w))), w), y0 = wrap(int(std::fmod(fy0, float(h))), h);
+    const int x0 = wrap_floor(fx0, w), y0 = wrap_floor(fy0, h);
     const int x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
-    const float* p00 = img.pixel(x0, y0);
-    const float* p10 = img.pixel(x1, y0);
-    const float* p01 = img.pixel(x0, y1);
-    const float* p11 = img.pixel(x1, y1);
-    const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
-    for (int k = 0; k < c; ++k) out[k] = w00 * p00[k] + w10 * p10[k] + w01 * p01[k] + w11 * p11[k];
+    const float* row0 = img.data() + std::size_t(y0) * std::size_t(w) * std::size_t(c);
+    const float* row1 = img.data() + std::size_t(y1) * std::size_t(w) * std::size_t(c);
+    const float *p00 = row0 + x0 * c, *p10 = row0 + x1 * c, *p01 = row1 + x0 * c, *p11 = row1 + x1 * c;
+    switch (c) {
+        case 3: blend<3>(p00, p10, p01, p11, ax, ay, c, out); break;
+        case 4: blend<4>(p00, p10, p01, p11, ax, ay, c, out); break;
+        case 1: blend<1>(p00, p10, p01, p11, ax, ay, c, out); break;
+        default: blend<0>(p00, p10, p01, p11, ax, ay, c, out); break;
+    }
 }
 
 void MipTexture::sample_bilinear(Vec2f uv, float* out) const { sample_level(0, uv, out); }

@@ -41,20 +41,27 @@ void trace_tile_packets(const EmbreeScene& scene, const Camera& camera, int x0, 
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     alignas(64) typename Shape::RayHit packet;
     alignas(64) int valid[N];
+    // Rays are affine in the pixel position: o + do/dx px + do/dy py (same for d). Evaluating
+    // that directly avoids per-ray trigonometry; it equals Camera::generate_ray up to rounding.
+    const Ray ray00 = camera.generate_ray(0.f, 0.f);
+    Vec3f do_dx, do_dy, dd_dx, dd_dy;
+    camera.ray_derivatives(do_dx, do_dy, dd_dx, dd_dy);
     for (int by = y0; by < y1; by += Shape::kH) {
         for (int bx = x0; bx < x1; bx += Shape::kW) {
             for (int lane = 0; lane < N; ++lane) {
                 const int x = bx + lane % Shape::kW, y = by + lane / Shape::kW;
                 valid[lane] = (x < x1 && y < y1) ? -1 : 0;
-                const Ray ray = camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f);
-                packet.ray.org_x[lane] = ray.origin.x;
-                packet.ray.org_y[lane] = ray.origin.y;
-                packet.ray.org_z[lane] = ray.origin.z;
-                packet.ray.dir_x[lane] = ray.direction.x;
-                packet.ray.dir_y[lane] = ray.direction.y;
-                packet.ray.dir_z[lane] = ray.direction.z;
-                packet.ray.tnear[lane] = ray.tnear;
-                packet.ray.tfar[lane] = ray.tfar;
+                const float px = float(x) + 0.5f, py = float(y) + 0.5f;
+                const Vec3f origin = ray00.origin + do_dx * px + do_dy * py;
+                const Vec3f direction = ray00.direction + dd_dx * px + dd_dy * py;
+                packet.ray.org_x[lane] = origin.x;
+                packet.ray.org_y[lane] = origin.y;
+                packet.ray.org_z[lane] = origin.z;
+                packet.ray.dir_x[lane] = direction.x;
+                packet.ray.dir_y[lane] = direction.y;
+                packet.ray.dir_z[lane] = direction.z;
+                packet.ray.tnear[lane] = ray00.tnear;
+                packet.ray.tfar[lane] = ray00.tfar;
                 packet.ray.time[lane] = 0.f;
                 packet.ray.mask[lane] = 0xFFFFFFFFu;
                 packet.ray.id[lane] = unsigned(lane);
@@ -103,25 +110,27 @@ void uv_derivatives(const TriangleMesh& mesh, int f, Vec3f origin, Vec3f directi
     const Vec3f e1 = mesh.positions[std::size_t(tri.y)] - p0;
     const Vec3f e2 = mesh.positions[std::size_t(tri.z)] - p0;
     const Vec3f ng = cross(e1, e2);
-    const float det = dot(ng, ng);
-    float ng_d = dot(ng, direction);
-    const float min_ng_d = 1e-8f * std::sqrt(det * dot(direction, direction));
-    if (std::fabs(ng_d) < min_ng_d) ng_d = ng_d < 0 ? -min_ng_d : min_ng_d;
-    if (det <= 0.f) {
+    const float det = dot(ng, ng);  // Gram determinant |e1|^2 |e2|^2 - (e1.e2)^2
+    if (!(det > 0.f)) {
         duv_dx = duv_dy = {};
         return;
     }
-    const float a11 = dot(e1, e1), a12 = dot(e1, e2), a22 = dot(e2, e2);
+    // Grazing rays: keep |ng.d| >= 1e-8 |ng||d| so the derivatives stay finite.
+    float ng_d = dot(ng, direction);
+    const float min_sq = 1e-16f * det * dot(direction, direction);
+    if (ng_d * ng_d < min_sq) ng_d = std::copysign(std::sqrt(min_sq), ng_d);
+    const float inv_ng_d = 1.f / ng_d, inv_det = 1.f / det;
+    const float a11 = dot(e1, e1) * inv_det, a12 = dot(e1, e2) * inv_det, a22 = dot(e2, e2) * inv_det;
     const Vec3i& uvt = mesh.uv_triangles[std::size_t(f)];
     const Vec2f uv0 = mesh.uvs[std::size_t(uvt.x)];
     const Vec2f du1 = mesh.uvs[std::size_t(uvt.y)] - uv0;
     const Vec2f du2 = mesh.uvs[std::size_t(uvt.z)] - uv0;
     auto derivative = [&](Vec3f d_origin, Vec3f d_direction) {
-        const float dt = -(dot(ng, d_origin) + t * dot(ng, d_direction)) / ng_d;
+        const float dt = -(dot(ng, d_origin) + t * dot(ng, d_direction)) * inv_ng_d;
         const Vec3f dp = d_origin + d_direction * t + direction * dt;
         const float r1 = dot(e1, dp), r2 = dot(e2, dp);
-        const float db1 = (a22 * r1 - a12 * r2) / det;
-        const float db2 = (a11 * r2 - a12 * r1) / det;
+        const float db1 = a22 * r1 - a12 * r2;
+        const float db2 = a11 * r2 - a12 * r1;
         return du1 * db1 + du2 * db2;
     };
     duv_dx = derivative(rd.do_dx, rd.dd_dx);
@@ -135,17 +144,15 @@ void check_inputs(const EmbreeScene& scene, const TriangleMesh& mesh, const Came
         throw_error("image size {}x{} is empty (width and height must be positive)", camera.width, camera.height);
 }
 
-}  // namespace
-
-void trace_gbuffer_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0,
-                        int x1, int y1, GBuffer& out) {
-    TDF_CHECK(out.width == camera.width && out.height == camera.height);
+// Traces [x0, x1) x [y0, y1) and stores pixel (x, y) at out.index(x - ox, y - oy).
+void trace_region(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0, int x1,
+                  int y1, GBuffer& out, int ox, int oy) {
     RayDerivatives rd;
     camera.ray_derivatives(rd.do_dx, rd.do_dy, rd.dd_dx, rd.dd_dy);
     const bool has_uvs = mesh.has_uvs();
     const bool has_tangents = !mesh.tangents.empty();
     trace_tile_dispatch(scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
-        const std::size_t i = out.index(x, y);
+        const std::size_t i = out.index(x - ox, y - oy);
         if (packet.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) {
             out.clear_pixel(i);
             return;
@@ -178,11 +185,20 @@ void trace_gbuffer_tile(const EmbreeScene& scene, const TriangleMesh& mesh, cons
     });
 }
 
+}  // namespace
+
+void trace_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0, int x1,
+                int y1, GBuffer& tile) {
+    TDF_CHECK(x0 >= 0 && y0 >= 0 && x1 <= camera.width && y1 <= camera.height && x0 < x1 && y0 < y1);
+    if (tile.width != x1 - x0 || tile.height != y1 - y0) tile.resize(x1 - x0, y1 - y0);
+    trace_region(scene, mesh, camera, x0, y0, x1, y1, tile, x0, y0);
+}
+
 void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out) {
     check_inputs(scene, mesh, camera);
     out.resize(camera.width, camera.height);
     parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
-        trace_gbuffer_tile(scene, mesh, camera, x0, y0, x1, y1, out);
+        trace_region(scene, mesh, camera, x0, y0, x1, y1, out, 0, 0);
     });
     scene.throw_if_error("tracing");
 }

@@ -62,6 +62,8 @@ public:
 
     /// Renders `passes` at camera.width x camera.height, one sample per pixel.
     Frame render(const Camera& camera, const Light& light, const std::vector<Pass>& passes) const;
+    /// The same into `frame`, reusing its images when passes and size match (no allocation).
+    void render(const Camera& camera, const Light& light, const std::vector<Pass>& passes, Frame& frame) const;
     /// Renders at the SSAA internal size (ceil(size * ssaa / 8) * 8 per side when ssaa != 1,
     /// spec 2.3) and resizes every pass back to camera.width x camera.height (spec 3.8).
     Frame render_ssaa(const Camera& camera, float ssaa, const Light& light, const std::vector<Pass>& passes) const;

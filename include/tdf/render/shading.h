@@ -16,6 +16,16 @@ Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f tangent_space_normal);
 /// spec 3.9 / 13.19).
 Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f tangent_space_normal);
 
+// Inline: called per pixel.
+inline Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {
+    // -B = -normalize(T x N) = normalize(N x T).
+    const Vec3f bitangent = safe_normalize(cross(N, T)) * w;
+    return T * p.x + bitangent * p.y + N * p.z;
+}
+inline Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f p) {
+    return safe_normalize(shading_normal_unnormalized(T, N, w, p));
+}
+
 /// The training renderer's `magic3d` point-light sample (spec 3.4). Three draws in the
 /// reference's order: azimuth phi ~ U[-pi, pi), elevation theta ~ U[pi/6, pi/2), distance
 /// d ~ U[3, 5). Frame: z_l = normalize(camera_position), x_l = normalize((z_l.y, -z_l.x, 0)),

@@ -19,10 +19,11 @@ constexpr int kTraceTile = 16;
 GBuffer trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera);
 /// The same, reusing `out`'s allocations.
 void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out);
-/// Traces the pixels [x0, x1) x [y0, y1) into `out`, which must already be sized for the camera.
-/// For renderers that shade each tile right after tracing it (cache-friendly).
-void trace_gbuffer_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0,
-                        int x1, int y1, GBuffer& out);
+/// Traces the pixels [x0, x1) x [y0, y1) of the camera's image into `tile`, resized to
+/// (x1 - x0) x (y1 - y0) when needed: tile pixel (0, 0) is image pixel (x0, y0). For renderers
+/// that shade each tile right after tracing it from a small, cache-resident buffer.
+void trace_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0, int x1,
+                int y1, GBuffer& tile);
 
 /// Baseline for benchmarks: the same packets and tiles, closest hit only; writes the hit
 /// distance (0 on a miss) per pixel to `t` and returns the number of hits.
