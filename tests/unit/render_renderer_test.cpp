@@ -1,4 +1,5 @@
 #include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
 #include <tdf/render/renderer.h>
 #include <tdf/render/shading.h>
 #include <tdf/render/trace.h>
@@ -125,4 +126,32 @@ TEST(Renderer, BadInputIsAnError) {
     EXPECT_THROW(ok.render(cam, Light{}, {Pass::Mask}), Error);
     EXPECT_THROW(ok.render(Camera::orbit(0, 0, 2, 49.1f, 8, 8), Light{}, {Pass::Mask, Pass::Mask}), Error);
     EXPECT_THROW(parse_pass("albdo"), Error);
+}
+
+TEST(Renderer, BitIdenticalForAnyThreadCount) {
+    const TriangleMesh sphere = make_uv_sphere(1.f, 64, 32);
+    const EmbreeScene scene(sphere);
+    Image map(64, 64, 3);
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const Vec3f n = safe_normalize({std::sin(float(x)), std::cos(float(y)), 2.f});
+            for (int c = 0; c < 3; ++c) map.at(x, y, c) = n[c];
+        }
+    const MipTexture tactile(map);
+    SurfaceMaterial material;
+    material.tactile = &tactile;
+    const Renderer renderer(sphere, scene, material);
+    const Camera cam = Camera::orbit(-10, 40, 3, 49.1f, 77, 61);
+    const Light light{Light::Kind::Point, {1, 2, 3}, 0.5f};
+    const std::vector<Pass> passes = {Pass::Lambertian, Pass::ShadingNormalViewspace, Pass::Mask};
+    Frame one, two;
+    {
+        ThreadLimit limit(1);
+        one = renderer.render_ssaa(cam, 1.37f, light, passes);
+    }
+    {
+        ThreadLimit limit(2);
+        two = renderer.render_ssaa(cam, 1.37f, light, passes);
+    }
+    for (std::size_t k = 0; k < passes.size(); ++k) EXPECT_EQ(one.images[k].values(), two.images[k].values());
 }

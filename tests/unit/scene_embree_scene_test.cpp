@@ -24,3 +24,19 @@ TEST(EmbreeScene, EmptyMeshIsAnError) {
         EXPECT_NE(std::string(e.what()).find("empty.obj"), std::string::npos) << e.what();
     }
 }
+
+TEST(EmbreeScene, DeviceErrorsBecomeTdfErrors) {
+    const TriangleMesh quad = make_quad();
+    EmbreeScene scene(quad);
+    // An invalid call on the scene's device: the callback records it, throw_if_error reports it.
+    RTCGeometry bad = rtcNewGeometry(scene.device(), RTCGeometryType(12345));
+    if (bad) rtcReleaseGeometry(bad);
+    try {
+        scene.throw_if_error("testing");
+        ADD_FAILURE() << "no error reported";
+    } catch (const Error& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("Embree error"), std::string::npos) << message;
+        EXPECT_NE(message.find("while testing"), std::string::npos) << message;
+    }
+}
