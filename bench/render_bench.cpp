@@ -90,13 +90,16 @@ void BM_GBuffer(benchmark::State& state) {
     set_rays(state);
 }
 
-void render_passes(benchmark::State& state, ShadingMode mode, const std::vector<Pass>& passes) {
+void render_passes(benchmark::State& state, ShadingMode mode, const std::vector<Pass>& passes,
+                   bool textured = true) {
     const BenchScene& s = BenchScene::get();
     ThreadLimit limit(int(state.range(0)));
     SurfaceMaterial material;
-    material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
-    material.albedo = &s.albedo;
-    material.tactile = &s.tactile;
+    if (textured) {
+        material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
+        material.albedo = &s.albedo;
+        material.tactile = &s.tactile;
+    }
     RenderSettings settings;
     settings.shading = mode;
     const Renderer renderer(s.mesh, s.scene, material, settings);
@@ -129,6 +132,11 @@ TDF_RENDER_BENCH(BM_GBuffer);
 TDF_RENDER_BENCH(BM_Render_Training);
 TDF_RENDER_BENCH(BM_Render_Visualizer);
 TDF_RENDER_BENCH(BM_Render_LambertianOnly);
+// The same without textures (constant albedo, flat tactile normal): the cost of the lookups.
+void BM_Render_LambertianUntextured(benchmark::State& state) {
+    render_passes(state, ShadingMode::Training, {Pass::Lambertian, Pass::Mask}, false);
+}
+TDF_RENDER_BENCH(BM_Render_LambertianUntextured);
 
 }  // namespace
 
