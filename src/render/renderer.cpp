@@ -43,8 +43,8 @@ namespace {
 // Per-pass output pointers, nullptr for passes not requested: the pixel loop writes straight
 // into the images without lookups or allocation.
 struct Targets {
-    std::array<float*, 11> base{};
-    std::array<int, 11> channels{};
+    std::array<float*, kPassCount> base{};
+    std::array<int, kPassCount> channels{};
     float* coverage = nullptr;
     float* at(Pass p, std::size_t pixel) const {
         float* b = base[std::size_t(p)];
