@@ -90,19 +90,19 @@ void BM_GBuffer(benchmark::State& state) {
     set_rays(state);
 }
 
-void render_all_passes(benchmark::State& state, ShadingMode mode) {
+void render_passes(benchmark::State& state, ShadingMode mode, const std::vector<Pass>& passes,
+                   bool textured = true) {
     const BenchScene& s = BenchScene::get();
     ThreadLimit limit(int(state.range(0)));
     SurfaceMaterial material;
-    material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
-    material.albedo = &s.albedo;
-    material.tactile = &s.tactile;
+    if (textured) {
+        material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
+        material.albedo = &s.albedo;
+        material.tactile = &s.tactile;
+    }
     RenderSettings settings;
     settings.shading = mode;
     const Renderer renderer(s.mesh, s.scene, material, settings);
-    const std::vector<Pass> passes = {Pass::Albedo, Pass::Lambertian, Pass::Mask, Pass::Depth, Pass::Normal,
-                                      Pass::Tangent, Pass::Uv, Pass::TactileNormal, Pass::ShadingNormal,
-                                      Pass::ShadingNormalViewspace};
     const Light light{Light::Kind::Point, {2, 3, 4}, 0.5f};
     Frame frame;  // reused: steady-state cost without allocating the output images
     for (auto _ : state) {
@@ -112,8 +112,18 @@ void render_all_passes(benchmark::State& state, ShadingMode mode) {
     set_rays(state);
 }
 
-void BM_Render_Training(benchmark::State& state) { render_all_passes(state, ShadingMode::Training); }
-void BM_Render_Visualizer(benchmark::State& state) { render_all_passes(state, ShadingMode::Visualizer); }
+const std::vector<Pass> kTenPasses = {Pass::Albedo,        Pass::Lambertian,    Pass::Mask,
+                                      Pass::Depth,         Pass::Normal,        Pass::Tangent,
+                                      Pass::Uv,            Pass::TactileNormal, Pass::ShadingNormal,
+                                      Pass::ShadingNormalViewspace};
+
+// Every pass but label (no label map here): the "full multi-pass render".
+void BM_Render_Training(benchmark::State& state) { render_passes(state, ShadingMode::Training, kTenPasses); }
+void BM_Render_Visualizer(benchmark::State& state) { render_passes(state, ShadingMode::Visualizer, kTenPasses); }
+// Only the shaded image and coverage (still both texture lookups and the TBN frame).
+void BM_Render_LambertianOnly(benchmark::State& state) {
+    render_passes(state, ShadingMode::Training, {Pass::Lambertian, Pass::Mask});
+}
 
 #define TDF_RENDER_BENCH(fn) BENCHMARK(fn)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()
 TDF_RENDER_BENCH(BM_Baseline_EmbreePackets);
@@ -121,6 +131,12 @@ TDF_RENDER_BENCH(BM_EmbreeSingleRays);
 TDF_RENDER_BENCH(BM_GBuffer);
 TDF_RENDER_BENCH(BM_Render_Training);
 TDF_RENDER_BENCH(BM_Render_Visualizer);
+TDF_RENDER_BENCH(BM_Render_LambertianOnly);
+// The same without textures (constant albedo, flat tactile normal): the cost of the lookups.
+void BM_Render_LambertianUntextured(benchmark::State& state) {
+    render_passes(state, ShadingMode::Training, {Pass::Lambertian, Pass::Mask}, false);
+}
+TDF_RENDER_BENCH(BM_Render_LambertianUntextured);
 
 }  // namespace
 

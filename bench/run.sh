@@ -6,7 +6,7 @@
 # single-thread runs is the steadiest.
 #   bench/run.sh                  all tdf_*_bench programs
 #   bench/run.sh render           only tdf_render_bench
-#   BENCH_ARGS="--benchmark_min_time=2" bench/run.sh
+#   BENCH_ARGS="--benchmark_repetitions=5" bench/run.sh render    (medians are reported)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${TDF_BUILD_DIR:-build}
@@ -25,7 +25,13 @@ for program in "${programs[@]}"; do
     ${BENCH_ARGS:-} >/dev/null
   python3 - "$OUT/$name.json" <<'PY'
 import json, sys
-runs = [b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("run_type", "iteration") == "iteration"]
+all_runs = json.load(open(sys.argv[1]))["benchmarks"]
+# With --benchmark_repetitions, report the medians.
+runs = [b for b in all_runs if b.get("aggregate_name") == "median"]
+for b in runs:
+    b["name"] = b["name"].removesuffix("_median")
+if not runs:
+    runs = [b for b in all_runs if b.get("run_type", "iteration") == "iteration"]
 def split(name):
     base, _, args = name.partition("/")
     return base, args

@@ -18,6 +18,7 @@ const std::vector<PassInfo>& all_passes() {
         {Pass::ShadingNormalViewspace, "shading_normal_viewspace", {"X", "Y", "Z"}, true},
         {Pass::Label, "label", {"R", "G", "B"}, false},
     };
+    TDF_CHECK_EQ(passes.size(), std::size_t(kPassCount));
     return passes;
 }
 

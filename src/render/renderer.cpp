@@ -43,8 +43,8 @@ namespace {
 // Per-pass output pointers, nullptr for passes not requested: the pixel loop writes straight
 // into the images without lookups or allocation.
 struct Targets {
-    std::array<float*, 11> base{};
-    std::array<int, 11> channels{};
+    std::array<float*, kPassCount> base{};
+    std::array<int, kPassCount> channels{};
     float* coverage = nullptr;
     float* at(Pass p, std::size_t pixel) const {
         float* b = base[std::size_t(p)];
@@ -58,11 +58,31 @@ inline void put3(float* out, Vec3f v) {
     out[2] = v.z;
 }
 
+// The mip LOD of one pixel depends only on the texture's size: textures of equal size (an
+// albedo and a tactile map, typically) share one computation.
+class PixelLod {
+public:
+    PixelLod(Vec2f duv_dx, Vec2f duv_dy) : m_dx(duv_dx), m_dy(duv_dy) {}
+    float of(const MipTexture& tex) {
+        if (tex.width() != m_width || tex.height() != m_height) {
+            m_width = tex.width();
+            m_height = tex.height();
+            m_lod = tex.level_of_detail(m_dx, m_dy);
+        }
+        return m_lod;
+    }
+
+private:
+    Vec2f m_dx, m_dy;
+    int m_width = -1, m_height = -1;
+    float m_lod = 0;
+};
+
 // Samples a texture into a 3-vector: RGB, or grey for 1-2 channels.
-Vec3f sample_rgb(const MipTexture& tex, Vec2f uv, Vec2f dx, Vec2f dy, bool mipmapped, int max_level) {
+Vec3f sample_rgb(const MipTexture& tex, Vec2f uv, PixelLod& lod, bool mipmapped, int max_level) {
     float texel[kMaxTextureChannels];
     if (mipmapped)
-        tex.sample_trilinear(uv, dx, dy, texel, max_level);
+        tex.sample_trilinear_at(uv, lod.of(tex), texel, max_level);
     else
         tex.sample_bilinear(uv, texel);
     return tex.channels() >= 3 ? Vec3f{texel[0], texel[1], texel[2]} : Vec3f{texel[0], texel[0], texel[0]};
@@ -117,6 +137,7 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
                 const std::size_t i = g.index(x - x0, y - y0);
                 const std::size_t px = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
                 const bool hit = g.mask[i] > 0.f;
+                PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
                 targets.coverage[px] = g.mask[i];
                 if (float* o = targets.at(Pass::Mask, px)) o[0] = g.mask[i];
                 if (float* o = targets.at(Pass::Depth, px)) o[0] = g.depth[i];
@@ -127,13 +148,12 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
                     o[1] = hit ? 1.f - g.uv[i].y : 0.f;  // the reference's v' (spec 3.9)
                 }
                 if (float* o = targets.at(Pass::Label, px))
-                    put3(o, hit && mat.label ? sample_rgb(*mat.label, g.uv[i], g.duv_dx[i], g.duv_dy[i], true,
-                                                          tactile_max_level)
+                    put3(o, hit && mat.label ? sample_rgb(*mat.label, g.uv[i], lod, true, tactile_max_level)
                                              : Vec3f{});
                 Vec3f albedo = m_settings.background;
                 if (need_albedo && hit) {
                     if (mat.albedo_source == Source::Texture)
-                        albedo = sample_rgb(*mat.albedo, g.uv[i], g.duv_dx[i], g.duv_dy[i], albedo_mipmapped, -1);
+                        albedo = sample_rgb(*mat.albedo, g.uv[i], lod, albedo_mipmapped, -1);
                     else if (mat.albedo_source == Source::VertexColors) {
                         const Vec3i& t = m_mesh.triangles[std::size_t(g.triangle[i])];
                         const Vec2f b = g.barycentric[i];
@@ -153,7 +173,7 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
                 Vec3f p{0, 0, 1};
                 if (mat.tactile) {
                     float texel[kMaxTextureChannels];
-                    mat.tactile->sample_trilinear(g.uv[i], g.duv_dx[i], g.duv_dy[i], texel, tactile_max_level);
+                    mat.tactile->sample_trilinear_at(g.uv[i], lod.of(*mat.tactile), texel, tactile_max_level);
                     p = {texel[0], texel[1], texel[2]};
                     if (training) p = safe_normalize(p);  // spec 3.1 step 5
                 }

@@ -132,8 +132,11 @@ float MipTexture::level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const {
 }
 
 void MipTexture::sample_trilinear(Vec2f uv, Vec2f duv_dx, Vec2f duv_dy, float* out, int max_level) const {
+    sample_trilinear_at(uv, level_of_detail(duv_dx, duv_dy), out, max_level);
+}
+
+void MipTexture::sample_trilinear_at(Vec2f uv, float lod, float* out, int max_level) const {
     const int top = max_level < 0 ? level_count() - 1 : std::min(max_level, level_count() - 1);
-    float lod = level_of_detail(duv_dx, duv_dy);
     if (!(lod > 0.f)) lod = 0.f;  // also catches NaN
     lod = std::min(lod, float(top));
     const int l0 = int(lod);

@@ -88,54 +88,94 @@ void trace_tile_dispatch(const EmbreeScene& scene, const Camera& camera, int x0,
 inline Vec4f operator*(Vec4f a, float s) { return {a.x * s, a.y * s, a.z * s, a.w * s}; }
 inline Vec4f operator+(Vec4f a, Vec4f b) { return {a.x + b.x, a.y + b.y, a.z + b.z, a.w + b.w}; }
 
-template <typename T>
-T interpolate(const std::vector<T>& values, const Vec3i& corners, float b1, float b2) {
-    const float b0 = 1.f - b1 - b2;
-    return values[std::size_t(corners.x)] * b0 + values[std::size_t(corners.y)] * b1 +
-           values[std::size_t(corners.z)] * b2;
-}
-
 // Camera ray derivatives, constant over the image.
 struct RayDerivatives {
     Vec3f do_dx, do_dy, dd_dx, dd_dy;
 };
 
-// dP/dpixel of the hit point on the triangle's plane (Igehy 1999 ray differentials), then
-// the barycentric and UV derivatives. Matches the rasterizer's analytic screen-space
-// derivatives of perspective-correct interpolation (spec 3.7).
-void uv_derivatives(const TriangleMesh& mesh, int f, Vec3f origin, Vec3f direction, float t,
-                    const RayDerivatives& rd, Vec2f& duv_dx, Vec2f& duv_dy) {
-    const Vec3i& tri = mesh.triangles[std::size_t(f)];
-    const Vec3f p0 = mesh.positions[std::size_t(tri.x)];
-    const Vec3f e1 = mesh.positions[std::size_t(tri.y)] - p0;
-    const Vec3f e2 = mesh.positions[std::size_t(tri.z)] - p0;
-    const Vec3f ng = cross(e1, e2);
-    const float det = dot(ng, ng);  // Gram determinant |e1|^2 |e2|^2 - (e1.e2)^2
-    if (!(det > 0.f)) {
-        duv_dx = duv_dy = {};
-        return;
+// Everything per-pixel work needs from one triangle, gathered once and reused while
+// neighbouring rays hit the same triangle (typically several pixels in a row).
+class TriangleCache {
+public:
+    void load(const TriangleMesh& mesh, int f, const RayDerivatives& rd) {
+        m_f = f;
+        const Vec3i& tri = mesh.triangles[std::size_t(f)];
+        p0 = mesh.positions[std::size_t(tri.x)];
+        p1 = mesh.positions[std::size_t(tri.y)];
+        p2 = mesh.positions[std::size_t(tri.z)];
+        n0 = mesh.normals[std::size_t(tri.x)];
+        n1 = mesh.normals[std::size_t(tri.y)];
+        n2 = mesh.normals[std::size_t(tri.z)];
+        has_tangents = !mesh.tangents.empty();
+        if (has_tangents) {
+            const Vec3i& tt = mesh.tangent_triangles[std::size_t(f)];
+            t0 = mesh.tangents[std::size_t(tt.x)];
+            t1 = mesh.tangents[std::size_t(tt.y)];
+            t2 = mesh.tangents[std::size_t(tt.z)];
+        }
+        has_uvs = mesh.has_uvs();
+        if (!has_uvs) return;
+        const Vec3i& ut = mesh.uv_triangles[std::size_t(f)];
+        uv0 = mesh.uvs[std::size_t(ut.x)];
+        uv1 = mesh.uvs[std::size_t(ut.y)];
+        uv2 = mesh.uvs[std::size_t(ut.z)];
+        // Ray differentials (Igehy 1999): the hit point moves on the triangle's plane; the
+        // barycentric derivatives follow from the Gram matrix of the edges.
+        e1 = p1 - p0;
+        e2 = p2 - p0;
+        ng = cross(e1, e2);
+        const float det = dot(ng, ng);  // |e1|^2 |e2|^2 - (e1.e2)^2
+        planar = det > 0.f;
+        if (!planar) return;
+        const float inv_det = 1.f / det;
+        a11 = dot(e1, e1) * inv_det;
+        a12 = dot(e1, e2) * inv_det;
+        a22 = dot(e2, e2) * inv_det;
+        min_ng_d_sq = 1e-16f * det;
+        du1 = uv1 - uv0;
+        du2 = uv2 - uv0;
+        ng_do_dx = dot(ng, rd.do_dx);
+        ng_do_dy = dot(ng, rd.do_dy);
+        ng_dd_dx = dot(ng, rd.dd_dx);
+        ng_dd_dy = dot(ng, rd.dd_dy);
     }
-    // Grazing rays: keep |ng.d| >= 1e-8 |ng||d| so the derivatives stay finite.
-    float ng_d = dot(ng, direction);
-    const float min_sq = 1e-16f * det * dot(direction, direction);
-    if (ng_d * ng_d < min_sq) ng_d = std::copysign(std::sqrt(min_sq), ng_d);
-    const float inv_ng_d = 1.f / ng_d, inv_det = 1.f / det;
-    const float a11 = dot(e1, e1) * inv_det, a12 = dot(e1, e2) * inv_det, a22 = dot(e2, e2) * inv_det;
-    const Vec3i& uvt = mesh.uv_triangles[std::size_t(f)];
-    const Vec2f uv0 = mesh.uvs[std::size_t(uvt.x)];
-    const Vec2f du1 = mesh.uvs[std::size_t(uvt.y)] - uv0;
-    const Vec2f du2 = mesh.uvs[std::size_t(uvt.z)] - uv0;
-    auto derivative = [&](Vec3f d_origin, Vec3f d_direction) {
-        const float dt = -(dot(ng, d_origin) + t * dot(ng, d_direction)) * inv_ng_d;
-        const Vec3f dp = d_origin + d_direction * t + direction * dt;
-        const float r1 = dot(e1, dp), r2 = dot(e2, dp);
-        const float db1 = a22 * r1 - a12 * r2;
-        const float db2 = a11 * r2 - a12 * r1;
-        return du1 * db1 + du2 * db2;
-    };
-    duv_dx = derivative(rd.do_dx, rd.dd_dx);
-    duv_dy = derivative(rd.do_dy, rd.dd_dy);
-}
+    bool holds(int f) const { return f == m_f; }
+
+    // d uv / d pixel at distance t along `direction` (matches the rasterizer's analytic
+    // screen-space derivatives of perspective-correct interpolation, spec 3.7).
+    void uv_derivatives(Vec3f direction, float t, const RayDerivatives& rd, Vec2f& duv_dx, Vec2f& duv_dy) const {
+        if (!planar) {
+            duv_dx = duv_dy = {};
+            return;
+        }
+        // Grazing rays: keep |ng.d| >= 1e-8 |ng||d| so the derivatives stay finite.
+        float ng_d = dot(ng, direction);
+        const float min_sq = min_ng_d_sq * dot(direction, direction);
+        if (ng_d * ng_d < min_sq) ng_d = std::copysign(std::sqrt(min_sq), ng_d);
+        const float inv_ng_d = 1.f / ng_d;
+        auto derivative = [&](Vec3f d_origin, Vec3f d_direction, float ng_do, float ng_dd) {
+            const float dt = -(ng_do + t * ng_dd) * inv_ng_d;
+            const Vec3f dp = d_origin + d_direction * t + direction * dt;
+            const float r1 = dot(e1, dp), r2 = dot(e2, dp);
+            return du1 * (a22 * r1 - a12 * r2) + du2 * (a11 * r2 - a12 * r1);
+        };
+        duv_dx = derivative(rd.do_dx, rd.dd_dx, ng_do_dx, ng_dd_dx);
+        duv_dy = derivative(rd.do_dy, rd.dd_dy, ng_do_dy, ng_dd_dy);
+    }
+
+    Vec3f p0, p1, p2, n0, n1, n2;
+    Vec4f t0, t1, t2;
+    Vec2f uv0, uv1, uv2;
+    bool has_tangents = false, has_uvs = false;
+
+private:
+    int m_f = -1;
+    Vec3f e1, e2, ng;
+    bool planar = false;
+    float a11 = 0, a12 = 0, a22 = 0, min_ng_d_sq = 0;
+    Vec2f du1, du2;
+    float ng_do_dx = 0, ng_do_dy = 0, ng_dd_dx = 0, ng_dd_dy = 0;
+};
 
 void check_inputs(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera) {
     TDF_CHECK_EQ(scene.triangle_count(), mesh.triangles.size());
@@ -149,8 +189,7 @@ void trace_region(const EmbreeScene& scene, const TriangleMesh& mesh, const Came
                   int y1, GBuffer& out, int ox, int oy) {
     RayDerivatives rd;
     camera.ray_derivatives(rd.do_dx, rd.do_dy, rd.dd_dx, rd.dd_dy);
-    const bool has_uvs = mesh.has_uvs();
-    const bool has_tangents = !mesh.tangents.empty();
+    TriangleCache tc;
     trace_tile_dispatch(scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
         const std::size_t i = out.index(x - ox, y - oy);
         if (packet.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) {
@@ -158,27 +197,27 @@ void trace_region(const EmbreeScene& scene, const TriangleMesh& mesh, const Came
             return;
         }
         const int f = int(packet.hit.primID[lane]);
+        if (!tc.holds(f)) tc.load(mesh, f, rd);
         const float b1 = packet.hit.u[lane], b2 = packet.hit.v[lane], t = packet.ray.tfar[lane];
-        const Vec3i& tri = mesh.triangles[std::size_t(f)];
+        const float b0 = 1.f - b1 - b2;
         out.mask[i] = 1.f;
         out.triangle[i] = f;
         out.barycentric[i] = {b1, b2};
-        out.position[i] = interpolate(mesh.positions, tri, b1, b2);
+        out.position[i] = tc.p0 * b0 + tc.p1 * b1 + tc.p2 * b2;
         out.depth[i] = t;  // direction has camera-space z = -1, so t = -z_cam
-        out.normal[i] = safe_normalize(interpolate(mesh.normals, tri, b1, b2));
-        if (has_tangents) {
-            const Vec4f tw = interpolate(mesh.tangents, mesh.tangent_triangles[std::size_t(f)], b1, b2);
+        out.normal[i] = safe_normalize(tc.n0 * b0 + tc.n1 * b1 + tc.n2 * b2);
+        if (tc.has_tangents) {
+            const Vec4f tw = tc.t0 * b0 + tc.t1 * b1 + tc.t2 * b2;
             out.tangent[i] = safe_normalize(tw.xyz());
             out.handedness[i] = tw.w < 0.f ? -1.f : 1.f;
         } else {
             out.tangent[i] = {};
             out.handedness[i] = 1.f;
         }
-        if (has_uvs) {
-            out.uv[i] = interpolate(mesh.uvs, mesh.uv_triangles[std::size_t(f)], b1, b2);
-            const Vec3f origin{packet.ray.org_x[lane], packet.ray.org_y[lane], packet.ray.org_z[lane]};
+        if (tc.has_uvs) {
+            out.uv[i] = tc.uv0 * b0 + tc.uv1 * b1 + tc.uv2 * b2;
             const Vec3f direction{packet.ray.dir_x[lane], packet.ray.dir_y[lane], packet.ray.dir_z[lane]};
-            uv_derivatives(mesh, f, origin, direction, t, rd, out.duv_dx[i], out.duv_dy[i]);
+            tc.uv_derivatives(direction, t, rd, out.duv_dx[i], out.duv_dy[i]);
         } else {
             out.uv[i] = out.duv_dx[i] = out.duv_dy[i] = {};
         }

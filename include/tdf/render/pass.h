@@ -21,6 +21,9 @@ enum class Pass {
     Label,                   ///< RGB label map sampled at the UVs, 0 background
 };
 
+/// Number of Pass values.
+constexpr int kPassCount = int(Pass::Label) + 1;
+
 struct PassInfo {
     Pass pass;
     const char* name;                       ///< spec name, e.g. "shading_normal_viewspace"

@@ -5,16 +5,23 @@
 
 namespace tdf {
 
+/// shading_normal() before its final normalisation (the visualizer's unnormalised
+/// viewspace_normal, spec 3.9 / 13.19).
+inline Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {
+    // -B = -normalize(T x N) = normalize(N x T).
+    const Vec3f bitangent = safe_normalize(cross(N, T)) * w;
+    return T * p.x + bitangent * p.y + N * p.z;
+}
+
 /// World shading normal from a tangent-space normal p (spec 3.3):
 /// normalize(T px + w normalize(N x T) py + N pz). With w = +1 this is the reference's
 /// normalize(T px - B py + N pz), B = normalize(T x N). w = -1 on mirrored UV charts flips the
 /// bitangent so the map's green channel still points toward increasing v (tdf default; the
 /// reference discards the sign, which TangentMode::Reference reproduces by giving w = +1).
-/// Uses safe_normalize, so a zero frame (background) gives a zero vector.
-Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f tangent_space_normal);
-/// The same before the final normalisation (the visualizer's unnormalised viewspace_normal,
-/// spec 3.9 / 13.19).
-Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f tangent_space_normal);
+/// Uses safe_normalize, so a zero frame (background) gives a zero vector. Inline: per pixel.
+inline Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f tangent_space_normal) {
+    return safe_normalize(shading_normal_unnormalized(T, N, w, tangent_space_normal));
+}
 
 // Inline: called per pixel.
 inline Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {

@@ -39,7 +39,9 @@ public:
     /// output pixel (tdf convention, v up). LOD is clamped to [0, max_level] where max_level = -1
     /// means the whole pyramid (training) and 5 is the visualizer's cap (spec 3.9).
     void sample_trilinear(Vec2f uv, Vec2f duv_dx, Vec2f duv_dy, float* out, int max_level = -1) const;
-    /// The LOD sample_trilinear() uses (before clamping).
+    /// The same with the LOD given (from level_of_detail() of a texture of the same size).
+    void sample_trilinear_at(Vec2f uv, float lod, float* out, int max_level = -1) const;
+    /// The LOD sample_trilinear() uses (before clamping); equal for textures of equal size.
     float level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const;
 
 private:
