@@ -15,6 +15,10 @@ Command register_optimize(CLI::App& root) {
     app->add_option("-o,--output", options->output_dir, "output folder")->required();
     app->add_option("--name", options->name, "file name prefix (default: the scene's folder name)");
     app->add_flag("--resume", options->resume, "continue an interrupted run from <output>/checkpoint.bin");
+    app->add_option("--stop-after", options->stop_after,
+                    "stop with a checkpoint after this many iterations (0 = run to the end); continue with --resume")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     command.app = app;
     command.run = [options] {
         run_optimize(*options);

@@ -23,20 +23,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Millimetres of surface per unit of UV, averaged over the atlas: sqrt(3-D area / UV area).
-double surface_units_per_uv(const TriangleMesh& mesh) {
-    double area_3d = 0, area_uv = 0;
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-        const Vec3i& t = mesh.triangles[f];
-        const Vec3i& u = mesh.uv_triangles[f];
-        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
-        area_3d += 0.5 * double(length(cross(mesh.positions[std::size_t(t.y)] - p0, mesh.positions[std::size_t(t.z)] - p0)));
-        const Vec2f a = mesh.uvs[std::size_t(u.x)], b = mesh.uvs[std::size_t(u.y)], c = mesh.uvs[std::size_t(u.z)];
-        area_uv += 0.5 * std::fabs(double((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)));
-    }
-    return area_uv > 0 ? std::sqrt(area_3d / area_uv) : 0.0;
-}
-
 // "avocado_00000" -> "avocado": texture names in the reference's description table.
 std::string texture_name_of(const std::string& path) {
     std::string stem = fs::path(path).stem().string();
@@ -60,12 +46,11 @@ std::unique_ptr<GuidanceBackend> make_backend(const std::string& name, const Run
     Json backend_config = Json::object();
     if (config.guidance_config.contains(name)) backend_config = config.guidance_config[name];
     auto backend = GuidanceBackend::create(name, backend_config);
-    if (auto* exemplar = dynamic_cast<ExemplarPatchMatchBackend*>(backend.get());
-        exemplar && exemplar->exemplar_count() == 0) {
+    if (backend && !backend_config.contains("exemplars")) {
         // The scene's own tactile maps are the touched exemplars unless the config names others.
         std::vector<Image> exemplars;
         for (const std::string& path : tactile_images) exemplars.push_back(read_normal_map(path));
-        exemplar->set_exemplars(std::move(exemplars));
+        backend->set_exemplars(std::move(exemplars));
     }
     return backend;
 }
@@ -127,11 +112,10 @@ void run_optimize(const OptimizeOptions& options) {
         if (!(mm_per_pixel > 0))
             throw_error("{}: tactile_layout.mode=physical needs the tactile map's millimetres per pixel "
                         "(tactile_layout.mm_per_pixel)", options.scene_path);
-        const double map_mm = double(assets->tactile.width()) * mm_per_pixel;
-        const double uv_mm = surface_units_per_uv(assets->mesh) * config.mm_per_unit;
-        target.tactile_layout.uv_scale = float(uv_mm / map_mm);
-        log_info("tactile map at physical size: {:.1f} mm wide, repeated {:.2f} times across the atlas", map_mm,
-                 target.tactile_layout.uv_scale);
+        target.tactile_layout.uv_scale =
+            physical_tactile_uv_scale(assets->mesh, config.mm_per_unit, assets->tactile.width(), mm_per_pixel);
+        log_info("tactile map at physical size: {:.1f} mm wide, repeated {:.2f} times across the atlas",
+                 double(assets->tactile.width()) * mm_per_pixel, target.tactile_layout.uv_scale);
     }
 
     Json resolved = description.to_json();
@@ -182,7 +166,9 @@ void run_optimize(const OptimizeOptions& options) {
 
     ProgressReporter progress("optimize", std::size_t(config.iterations), 10);
     progress.advance(std::size_t(trainer.iteration()));
-    while (trainer.iteration() < config.iterations) {
+    const int last_iteration =
+        options.stop_after > 0 ? std::min(options.stop_after, config.iterations) : config.iterations;
+    while (trainer.iteration() < last_iteration) {
         LossRecord record;
         try {
             record = trainer.step();
@@ -208,6 +194,11 @@ void run_optimize(const OptimizeOptions& options) {
     }
     progress.finish();
     write_log();
+    if (trainer.iteration() < config.iterations) {
+        save_checkpoint();
+        log_info("stopped after iteration {} as asked; continue with --resume", trainer.iteration());
+        return;
+    }
 
     const BakedMaps maps = export_asset(options.output_dir, name, "", trainer.field(), assets->mesh, config);
     const QualityReport quality = trainer.evaluate_held_out();

@@ -31,6 +31,8 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.patch_batch_size = r.get("patch_batch_size", c.patch_batch_size);
     c.resolution = r.get("resolution", c.resolution);
     c.patch_resolution = r.get("patch_resolution", c.patch_resolution);
+    c.patch_half_extent = r.get("patch_half_extent", c.patch_half_extent);
+    c.patch_distance = r.get("patch_distance", c.patch_distance);
     c.max_ssaa = r.get("max_ssaa", c.max_ssaa);
     c.learning_rate = r.get("learning_rate", c.learning_rate);
     c.checkpoint_every = r.get("checkpoint_every", c.checkpoint_every);
@@ -99,6 +101,8 @@ void RunConfig::validate(const std::string& source) const {
     positive("optimize.resolution", resolution);
     positive("optimize.patch_resolution", patch_resolution);
     positive("optimize.learning_rate", learning_rate);
+    positive("optimize.patch_half_extent", patch_half_extent);
+    positive("optimize.patch_distance", patch_distance);
     positive("export.texture_size", texture_size);
     if (init_iterations < 0 || init_iterations > iterations)
         throw_error("{}: optimize.init_iterations must be in [0, iterations={}], got {}", source, iterations,
@@ -130,6 +134,8 @@ Json RunConfig::to_json() const {
         {"patch_batch_size", patch_batch_size},
         {"resolution", resolution},
         {"patch_resolution", patch_resolution},
+        {"patch_half_extent", patch_half_extent},
+        {"patch_distance", patch_distance},
         {"max_ssaa", max_ssaa},
         {"learning_rate", learning_rate},
         {"checkpoint_every", checkpoint_every},

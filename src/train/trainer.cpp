@@ -65,6 +65,22 @@ struct Trainer::Batch {
     Image internal;            // one view at its internal (SSAA) size
 };
 
+float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int map_width_pixels,
+                                float mm_per_pixel) {
+    double area_3d = 0, area_uv = 0;
+    for (std::size_t f = 0; f < mesh.triangles.size() && mesh.has_uvs(); ++f) {
+        const Vec3i& t = mesh.triangles[f];
+        const Vec3i& u = mesh.uv_triangles[f];
+        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
+        area_3d += 0.5 * double(length(cross(mesh.positions[std::size_t(t.y)] - p0, mesh.positions[std::size_t(t.z)] - p0)));
+        const Vec2f a = mesh.uvs[std::size_t(u.x)], b = mesh.uvs[std::size_t(u.y)], c = mesh.uvs[std::size_t(u.z)];
+        area_uv += 0.5 * std::fabs(double((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)));
+    }
+    if (!(area_uv > 0) || !(area_3d > 0)) throw_error("{}: the UV atlas has no area", mesh.source_path);
+    const double uv_mm = std::sqrt(area_3d / area_uv) * double(mm_per_unit);
+    return float(uv_mm / (double(map_width_pixels) * double(mm_per_pixel)));
+}
+
 Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uint64_t seed)
     : m_target(target), m_config(config), m_seed(seed), m_batch(std::make_unique<Batch>()) {
     TDF_CHECK(target.mesh && target.scene && target.material);
@@ -120,7 +136,8 @@ LossRecord Trainer::step() {
     b.gbuffers.resize(std::size_t(P + B));
     b.views.resize(std::size_t(B));
     b.lights.resize(std::size_t(B));
-    for (int k = 0; k < P; ++k) b.cameras[std::size_t(k)] = sample_patch_view(rng, mesh, R);
+    for (int k = 0; k < P; ++k) b.cameras[std::size_t(k)] =
+            sample_patch_view(rng, mesh, R, cfg.patch_distance, cfg.patch_half_extent);
     VisualViewOptions view_options;
     view_options.resolution = S;
     view_options.random_ssaa = cfg.max_ssaa > 1.0f;
@@ -461,7 +478,8 @@ QualityReport Trainer::evaluate_held_out() const {
     std::size_t cosine_count = 0;
     for (int k = 0; k < cfg.held_out_patches; ++k) {
         Rng rng = Rng::stream(m_seed ^ kHeldOutStream ^ 0x7061746368ULL, std::uint64_t(k));
-        const Camera camera = sample_patch_view(rng, mesh, cfg.patch_resolution);
+        const Camera camera =
+            sample_patch_view(rng, mesh, cfg.patch_resolution, cfg.patch_distance, cfg.patch_half_extent);
         trace_gbuffer(*m_target.scene, mesh, camera, g);
         evaluate_hits(g);
         const ViewRotation rot = view_rotation(camera);

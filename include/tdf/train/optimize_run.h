@@ -12,6 +12,9 @@ struct OptimizeOptions {
     std::string output_dir;
     std::string name;                    ///< file prefix; default: the scene file's folder name
     bool resume = false;                 ///< continue from `<output_dir>/checkpoint.bin`
+    /// Stop (with a checkpoint) once this many iterations are done, 0 = run to the end. For
+    /// batch schedulers with time limits: run in slices, each continuing with `resume`.
+    int stop_after = 0;
 };
 
 /// Runs the whole job; throws tdf::Error on bad input or a failed run (the last good

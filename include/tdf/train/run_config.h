@@ -33,6 +33,8 @@ struct RunConfig {
     int patch_batch_size = 4;       ///< tactile patches per iteration (spec 2.4)
     int resolution = 512;           ///< visual render size (spec 2.3)
     int patch_resolution = 512;     ///< tactile patch render size (spec 2.4)
+    float patch_half_extent = 0.075f;  ///< half side of the orthographic patch window, mesh units (spec 2.4)
+    float patch_distance = 0.1f;    ///< patch camera height above the surface, mesh units (spec 2.4)
     float max_ssaa = 2.0f;          ///< random SSAA factor in [1, max] (spec 2.3); 1 = off
     float learning_rate = 0.01f;    ///< Adam lr (spec 4.4)
     LossWeights weights;

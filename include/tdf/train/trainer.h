@@ -33,6 +33,12 @@ struct TrainingTarget {
     std::string prompt;                     ///< visual guidance text (spec 5.7)
 };
 
+/// The UV scale that lays a tactile map at its physical size (TactileLayout::Physical): the
+/// atlas's mean surface size per UV unit, sqrt(3-D area / UV area) x mm_per_unit, divided by
+/// the map's width in millimetres. Throws tdf::Error when the mesh has no UV area.
+float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int map_width_pixels,
+                                float mm_per_pixel);
+
 /// Held-out quality after training (README "Measured").
 struct QualityReport {
     double albedo_psnr_foreground = 0;  ///< dB over covered pixels of the held-out views

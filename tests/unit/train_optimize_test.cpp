@@ -1,0 +1,181 @@
+// End-to-end checks of `tdf optimize` on the shipped pebble sphere at a small size: quality after
+// the matching phase, determinism across thread counts, resume, exports and bad input.
+#include <tdf/core/atomic_file.h>
+#include <tdf/core/config.h>
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+#include <tdf/io/image_io.h>
+#include <tdf/mesh/mesh_io.h>
+#include <tdf/train/optimize_run.h>
+#include <tdf/train/trainer.h>
+
+#include "common/test_paths.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+using namespace tdf;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kScene = test::source_dir() + "/scenes/pebble_sphere/scene.json";
+
+// A small configuration: every stage runs, in a few seconds.
+std::vector<std::string> small_run(int iterations, int init_iterations) {
+    return {"optimize.iterations=" + std::to_string(iterations),
+            "optimize.init_iterations=" + std::to_string(init_iterations),
+            "optimize.resolution=96",
+            "optimize.patch_resolution=64",
+            "optimize.batch_size=2",
+            "optimize.patch_batch_size=2",
+            "optimize.held_out_views=2",
+            "optimize.held_out_patches=2",
+            "export.texture_size=128",
+            "export.turntable_views=1",
+            "export.turntable_resolution=64",
+            "guidance.tactile=none"};
+}
+
+std::string run_into(const std::string& folder, std::vector<std::string> overrides, int stop_after = 0,
+                     bool resume = false) {
+    OptimizeOptions options;
+    options.scene_path = kScene;
+    options.overrides = std::move(overrides);
+    options.output_dir = test::scratch_dir() + "/" + folder;
+    options.name = "pebble";
+    options.stop_after = stop_after;
+    options.resume = resume;
+    if (!resume) fs::remove_all(options.output_dir);
+    run_optimize(options);
+    return options.output_dir + "/pebble";
+}
+
+std::string file_bytes(const std::string& path) { return read_text_file(path); }
+
+}  // namespace
+
+TEST(Optimize, MatchingPhaseReachesQualityThresholds) {
+    // The field must reproduce the base albedo and the tactile map on views and patches it never
+    // trained on (issue thresholds: 30 dB, 0.95).
+    // 200 matching iterations at 96 px. Patch windows 4x wider than the reference's (0.075) so
+    // that 400 patches see the whole sphere and held-out patches land on trained surface (one of
+    // the reference's windows covers 0.3 % of this sphere). Measured: 30.96 dB, 0.9957.
+    auto overrides = small_run(200, 200);
+    overrides.push_back("optimize.patch_half_extent=0.3");
+    overrides.push_back("optimize.batch_size=4");
+    overrides.push_back("optimize.held_out_views=4");
+    overrides.push_back("optimize.held_out_patches=4");
+    const std::string base = run_into("quality", overrides);
+    const Json report = parse_json(read_text_file(base + "_report.json"), base + "_report.json");
+    const double psnr = report["quality"]["albedo_psnr_foreground_db"].get<double>();
+    const double cosine = report["quality"]["tactile_mean_cosine"].get<double>();
+    RecordProperty("albedo_psnr_db", std::to_string(psnr));
+    RecordProperty("tactile_cosine", std::to_string(cosine));
+    std::printf("held-out albedo PSNR %.2f dB, tactile mean cosine %.4f\n", psnr, cosine);
+    EXPECT_GE(psnr, 30.0);
+    EXPECT_GE(cosine, 0.95);
+}
+
+TEST(Optimize, ExportsReferenceFilesAndMaterialWithNormalMap) {
+    const std::string base = run_into("exports", small_run(4, 2));
+    for (const char* suffix : {".obj", ".mtl", ".glb", "_albedo.png", "_tactile_normal.png", "_albedo.exr",
+                               "_tactile_normal.exr", "_config.json", "_losses.jsonl", "_loss_plot.svg",
+                               "_report.json", "_initialized.obj", "_initialized_albedo.png"})
+        EXPECT_TRUE(fs::exists(base + suffix)) << base + suffix;
+    const std::string mtl = read_text_file(base + ".mtl");
+    EXPECT_NE(mtl.find("map_Kd pebble_albedo.png"), std::string::npos) << mtl;
+    EXPECT_NE(mtl.find("pebble_tactile_normal.png"), std::string::npos) << mtl;
+    const Image albedo = read_image(base + "_albedo.png");
+    EXPECT_EQ(albedo.width(), 128);
+    // The exported mesh opens again with the same geometry.
+    const TriangleMesh original = load_mesh(test::source_dir() + "/scenes/pebble_sphere/sphere.obj");
+    const TriangleMesh exported = load_mesh(base + ".obj");
+    EXPECT_EQ(exported.triangles.size(), original.triangles.size());
+    EXPECT_FALSE(exported.albedo.empty());
+    // Every iteration is logged with its weighted terms.
+    const std::string log = read_text_file(base + "_losses.jsonl");
+    EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 4);
+    EXPECT_NE(log.find("albedo_matching"), std::string::npos);
+    EXPECT_NE(log.find("albedo_mean_colour"), std::string::npos);
+}
+
+TEST(Optimize, SameSeedSameFilesOnOneAndTwoThreads) {
+    std::string one, two;
+    {
+        ThreadLimit limit(1);
+        one = run_into("threads1", small_run(5, 3));
+    }
+    {
+        ThreadLimit limit(2);
+        two = run_into("threads2", small_run(5, 3));
+    }
+    for (const char* suffix : {"_albedo.exr", "_tactile_normal.exr", "_albedo.png", ".obj"})
+        EXPECT_EQ(file_bytes(one + suffix), file_bytes(two + suffix)) << suffix;
+}
+
+TEST(Optimize, ResumedRunEndsWithTheSameFiles) {
+    const std::string straight = run_into("straight", small_run(6, 3));
+    const std::string sliced = run_into("sliced", small_run(6, 3), 2);
+    EXPECT_FALSE(fs::exists(sliced + ".obj"));  // not finished yet
+    run_into("sliced", small_run(6, 3), 4, true);
+    run_into("sliced", small_run(6, 3), 0, true);
+    for (const char* suffix : {"_albedo.exr", "_tactile_normal.exr", "_initialized_albedo.exr", ".obj"})
+        EXPECT_EQ(file_bytes(straight + suffix), file_bytes(sliced + suffix)) << suffix;
+}
+
+TEST(Optimize, ResumeRefusesAnotherConfiguration) {
+    run_into("mismatch", small_run(4, 2), 2);
+    auto changed = small_run(4, 2);
+    changed.push_back("optimize.learning_rate=0.02");
+    try {
+        run_into("mismatch", changed, 0, true);
+        FAIL() << "resumed with another configuration";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("different scene or configuration"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Optimize, NonFiniteLossStopsAndNamesTheTerm) {
+    auto overrides = small_run(6, 6);
+    overrides.push_back("optimize.learning_rate=1e30");
+    overrides.push_back("optimize.checkpoint_every=1");
+    try {
+        run_into("nan", overrides);
+        FAIL() << "a diverging run finished";
+    } catch (const Error& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("not finite"), std::string::npos) << message;
+        EXPECT_NE(message.find("--resume"), std::string::npos) << message;
+    }
+    EXPECT_TRUE(fs::exists(test::scratch_dir() + "/nan/checkpoint.bin"));
+}
+
+TEST(Optimize, BadConfigurationIsAClearError) {
+    const auto expect_error = [](std::vector<std::string> overrides, const std::string& needle) {
+        try {
+            run_into("bad", std::move(overrides));
+            ADD_FAILURE() << "accepted: " << needle;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+    };
+    expect_error({"optimize.iterations=0"}, "optimize.iterations must be positive");
+    expect_error({"optimize.itertions=5"}, "unknown key(s) 'itertions'");
+    expect_error({"optimize.init_iterations=500"}, "init_iterations");
+    expect_error({"tactile_layout.mode=physical"}, "mm_per_unit");
+    expect_error({"guidance.visual=stable_diffusion"}, "unknown guidance backend");
+    expect_error({"tactile.images=[]"}, "no tactile texture");
+}
+
+TEST(Optimize, PhysicalLayoutScaleFromAreas) {
+    // A 2 x 2 unit quad mapped to the whole UV square: 2 units per UV unit. At 10 mm per unit a UV
+    // unit spans 20 mm; a 100 px map at 0.05 mm/px spans 5 mm, so it repeats 4 times.
+    TriangleMesh quad;
+    quad.positions = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}};
+    quad.triangles = {{0, 1, 2}, {0, 2, 3}};
+    quad.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    quad.uv_triangles = quad.triangles;
+    EXPECT_NEAR(physical_tactile_uv_scale(quad, 10.0f, 100, 0.05f), 4.0f, 1e-5f);
+}
