@@ -5,6 +5,7 @@
 #include <tdf/core/rng.h>
 #include <tdf/core/vec.h>
 #include <tdf/guidance/exemplar_patch_match.h>
+#include <tdf/tactile/tactile_map.h>
 #include <tdf/guidance/image_filters.h>
 #include <tdf/guidance/relief_shading.h>
 
@@ -20,7 +21,7 @@ Image exemplar() {
     const char* env = std::getenv("TDF_SHARED_DATA");
     const std::string path =
         std::string(env ? env : "../shared/data") + "/tactile/texture_samples/avocado_00000.png";
-    if (std::filesystem::exists(path)) return read_normal_map(path);
+    if (std::filesystem::exists(path)) return load_tactile_map(path).normals;
     Image e(240, 240, 3);
     for (int y = 0; y < 240; ++y)
         for (int x = 0; x < 240; ++x) {

@@ -1,5 +1,7 @@
 #include <tdf/guidance/exemplar_patch_match.h>
 
+#include <tdf/tactile/tactile_map.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
@@ -352,16 +354,6 @@ std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
 
 }  // namespace
 
-Image read_normal_map(const std::string& path) {
-    Image image = read_image(path);
-    if (image.channels() < 3)
-        throw_error("{}: a normal map needs 3 channels, the file has {}", path, image.channels());
-    if (image.channels() > 3) image = image.channel_range(0, 3);
-    if (lower_extension(path) != ".exr")
-        for (float& v : image.values()) v = v * 2.0f - 1.0f;
-    return image;
-}
-
 ExemplarPatchMatchBackend::Options ExemplarPatchMatchBackend::Options::from_json(const Json& config) {
     ConfigReader reader(config, "guidance backend 'exemplar_patch_match'");
     Options o;
@@ -401,7 +393,7 @@ ExemplarPatchMatchBackend::Options ExemplarPatchMatchBackend::Options::from_json
 ExemplarPatchMatchBackend::ExemplarPatchMatchBackend(Options options) : m_options(std::move(options)) {
     if (!m_options.exemplar_files.empty()) {
         std::vector<Image> exemplars;
-        for (const std::string& file : m_options.exemplar_files) exemplars.push_back(read_normal_map(file));
+        for (const std::string& file : m_options.exemplar_files) exemplars.push_back(load_tactile_map(file).normals);
         set_exemplars(std::move(exemplars));
     }
 }

@@ -4,6 +4,7 @@
 #include <tdf/core/error.h>
 
 #include <ImfChannelList.h>
+#include <Imath/half.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
@@ -312,17 +313,25 @@ void write_exr_file(const std::string& path, const std::vector<ExrLayer>& layers
             header.compression() = Imf::ZIP_COMPRESSION;
             for (const auto& [key, value] : metadata) header.insert(key, Imf::StringAttribute(value));
             Imf::FrameBuffer frame;
+            // OpenEXR does not convert between the frame buffer's and the file's pixel types on
+            // write, so half files are written from a half copy of the pixels.
+            std::vector<std::vector<Imath::half>> half_copies;
             for (const auto& layer : layers) {
                 const int channels = layer.image.channels();
+                const std::size_t x_stride = std::size_t(channels), y_stride = x_stride * std::size_t(width);
+                char* base = reinterpret_cast<char*>(const_cast<float*>(layer.image.data()));
+                std::size_t element = sizeof(float);
+                if (type == ExrPixelType::Half) {
+                    half_copies.emplace_back(layer.image.values().begin(), layer.image.values().end());
+                    base = reinterpret_cast<char*>(half_copies.back().data());
+                    element = sizeof(Imath::half);
+                }
                 for (int c = 0; c < channels; ++c) {
                     const std::string name =
                         layer.name.empty() ? layer.channel_names[std::size_t(c)] : layer.name + "." + layer.channel_names[std::size_t(c)];
                     header.channels().insert(name, Imf::Channel(pixel_type));
-                    // OpenEXR converts float to half on write when the channel type is HALF.
-                    frame.insert(name, Imf::Slice(Imf::FLOAT,
-                                                  reinterpret_cast<char*>(const_cast<float*>(layer.image.data() + c)),
-                                                  sizeof(float) * std::size_t(channels),
-                                                  sizeof(float) * std::size_t(channels) * std::size_t(width)));
+                    frame.insert(name, Imf::Slice(pixel_type, base + element * std::size_t(c), element * x_stride,
+                                                  element * y_stride));
                 }
             }
             Imf::OutputFile file(tmp.c_str(), header);

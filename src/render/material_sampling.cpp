@@ -2,12 +2,6 @@
 
 namespace tdf {
 
-namespace {
-Vec3f texel_rgb(const MipTexture& tex, const float* texel) {
-    return tex.channels() >= 3 ? Vec3f{texel[0], texel[1], texel[2]} : Vec3f{texel[0], texel[0], texel[0]};
-}
-}  // namespace
-
 Vec3f sample_albedo(const SurfaceMaterial& material, const TriangleMesh& mesh, const GBuffer& g, std::size_t i,
                     bool mipmapped) {
     using Source = SurfaceMaterial::AlbedoSource;
@@ -20,12 +14,7 @@ Vec3f sample_albedo(const SurfaceMaterial& material, const TriangleMesh& mesh, c
                 material.albedo->sample_bilinear(g.uv[i], texel);
             return texel_rgb(*material.albedo, texel);
         }
-        case Source::VertexColors: {
-            const Vec3i& t = mesh.triangles[std::size_t(g.triangle[i])];
-            const Vec2f b = g.barycentric[i];
-            return mesh.colors[std::size_t(t.x)] * (1.f - b.x - b.y) + mesh.colors[std::size_t(t.y)] * b.x +
-                   mesh.colors[std::size_t(t.z)] * b.y;
-        }
+        case Source::VertexColors: return vertex_color_at(mesh, g, i);
         case Source::Constant: break;
     }
     return material.albedo_constant;

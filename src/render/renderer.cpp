@@ -1,5 +1,7 @@
 #include <tdf/render/renderer.h>
 
+#include <tdf/render/material_sampling.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/render/resample.h>
@@ -85,7 +87,7 @@ Vec3f sample_rgb(const MipTexture& tex, Vec2f uv, PixelLod& lod, bool mipmapped,
         tex.sample_trilinear_at(uv, lod.of(tex), texel, max_level);
     else
         tex.sample_bilinear(uv, texel);
-    return tex.channels() >= 3 ? Vec3f{texel[0], texel[1], texel[2]} : Vec3f{texel[0], texel[0], texel[0]};
+    return texel_rgb(tex, texel);
 }
 
 }  // namespace
@@ -154,12 +156,9 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
                 if (need_albedo && hit) {
                     if (mat.albedo_source == Source::Texture)
                         albedo = sample_rgb(*mat.albedo, g.uv[i], lod, albedo_mipmapped, -1);
-                    else if (mat.albedo_source == Source::VertexColors) {
-                        const Vec3i& t = m_mesh.triangles[std::size_t(g.triangle[i])];
-                        const Vec2f b = g.barycentric[i];
-                        albedo = m_mesh.colors[std::size_t(t.x)] * (1.f - b.x - b.y) +
-                                 m_mesh.colors[std::size_t(t.y)] * b.x + m_mesh.colors[std::size_t(t.z)] * b.y;
-                    } else
+                    else if (mat.albedo_source == Source::VertexColors)
+                        albedo = vertex_color_at(m_mesh, g, i);
+                    else
                         albedo = mat.albedo_constant;
                 }
                 if (float* o = targets.at(Pass::Albedo, px)) put3(o, albedo);

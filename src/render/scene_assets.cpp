@@ -1,5 +1,7 @@
 #include <tdf/render/scene_assets.h>
 
+#include <tdf/tactile/tactile_map.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
@@ -9,14 +11,6 @@
 #include <filesystem>
 
 namespace tdf {
-
-Image decode_normal_map(const Image& image, const std::string& source) {
-    if (image.channels() < 3)
-        throw_error("{}: a normal map needs 3 channels (RGB), this image has {}", source, image.channels());
-    Image out = image.channel_range(0, 3);
-    for (float& v : out.values()) v = v * 2.f - 1.f;
-    return out;
-}
 
 namespace {
 Image read_checked(const std::string& path, const std::string& scene, const char* what) {
@@ -63,7 +57,8 @@ std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
     if (m.albedo_source == Source::Texture) m.albedo = &assets->albedo;
     if (!d.tactile_images.empty()) {
         const std::string& path = d.tactile_images.front();
-        assets->tactile = MipTexture(decode_normal_map(read_checked(path, d.path, "tactile image"), path));
+        if (!std::filesystem::exists(path)) throw_error("{}: tactile image '{}' does not exist", d.path, path);
+        assets->tactile = MipTexture(load_tactile_map(path).normals);
         m.tactile = &assets->tactile;
         if (d.tactile_images.size() > 1)
             log_info("{}: rendering the first of {} tactile images", d.path, d.tactile_images.size());

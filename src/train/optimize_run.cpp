@@ -10,6 +10,7 @@
 #include <tdf/guidance/schedule.h>
 #include <tdf/optim/checkpoint.h>
 #include <tdf/render/scene_assets.h>
+#include <tdf/tactile/tactile_map.h>
 #include <tdf/train/asset_export.h>
 #include <tdf/train/trainer.h>
 
@@ -49,7 +50,7 @@ std::unique_ptr<GuidanceBackend> make_backend(const std::string& name, const Run
     if (backend && !backend_config.contains("exemplars")) {
         // The scene's own tactile maps are the touched exemplars unless the config names others.
         std::vector<Image> exemplars;
-        for (const std::string& path : tactile_images) exemplars.push_back(read_normal_map(path));
+        for (const std::string& path : tactile_images) exemplars.push_back(load_tactile_map(path).normals);
         backend->set_exemplars(std::move(exemplars));
     }
     return backend;
@@ -108,10 +109,13 @@ void run_optimize(const OptimizeOptions& options) {
     target.material = &assets->material;
     target.prompt = make_prompt(description.mesh, description.tactile_images.front());
     if (config.tactile_layout == TactileLayout::Physical) {
-        const float mm_per_pixel = config.tactile_mm_per_pixel;
+        const float mm_per_pixel = config.tactile_mm_per_pixel > 0
+                                       ? config.tactile_mm_per_pixel
+                                       : load_tactile_map(description.tactile_images.front()).mm_per_pixel;
         if (!(mm_per_pixel > 0))
-            throw_error("{}: tactile_layout.mode=physical needs the tactile map's millimetres per pixel "
-                        "(tactile_layout.mm_per_pixel)", options.scene_path);
+            throw_error("{}: tactile_layout.mode=physical needs the tactile map's millimetres per pixel: '{}' has no "
+                        "tdf:mm_per_pixel metadata (make it with `tdf tactile`) and tactile_layout.mm_per_pixel is not set",
+                        options.scene_path, description.tactile_images.front());
         target.tactile_layout.uv_scale =
             physical_tactile_uv_scale(assets->mesh, config.mm_per_unit, assets->tactile.width(), mm_per_pixel);
         log_info("tactile map at physical size: {:.1f} mm wide, repeated {:.2f} times across the atlas",

@@ -3,6 +3,7 @@
 #include <tdf/core/rng.h>
 #include <tdf/core/vec.h>
 #include <tdf/guidance/exemplar_patch_match.h>
+#include <tdf/tactile/tactile_map.h>
 #include <tdf/guidance/image_filters.h>
 
 #include "common/test_paths.h"
@@ -247,7 +248,7 @@ TEST(GuidanceExemplarPatchMatch, ConfigAndRequestErrors) {
 TEST(GuidanceExemplarPatchMatch, RealTactileSamplePullsSmoothNormalsTowardIt) {
     TDF_REQUIRE_SHARED_DATA("tactile/texture_samples/avocado_00000.png");
     const Image sample =
-        read_normal_map(test::shared_data_dir() + "/tactile/texture_samples/avocado_00000.png");
+        load_tactile_map(test::shared_data_dir() + "/tactile/texture_samples/avocado_00000.png").normals;
     ASSERT_EQ(sample.width(), 240);
     // Exemplar: the top-left 96x96 of the capture. Target: a disjoint 32x32 region, rotated by
     // 90 degrees and blurred (a smooth field that only knows the coarse relief).

@@ -54,6 +54,17 @@ TEST(ImageIo, MultiLayerExrKeepsNamesAndValues) {
     EXPECT_EQ(layers[1].image.values(), depth.values());
 }
 
+TEST(ImageIo, HalfExrStoresHalfPrecisionValues) {
+    const Image img = ramp(8, 5, 3);
+    const std::string p = test::scratch_dir() + "/half.exr";
+    write_exr(p, img, ExrPixelType::Half);
+    const Image back = read_image(p);
+    ASSERT_EQ(back.values().size(), img.values().size());
+    for (std::size_t i = 0; i < img.values().size(); ++i)
+        EXPECT_NEAR(back.values()[i], img.values()[i], 1e-3f * std::max(1.0f, img.values()[i]));
+    EXPECT_LT(std::filesystem::file_size(p), 2000u);
+}
+
 TEST(ImageIo, BadFilesGiveErrorsNamingTheFile) {
     const std::string missing = test::scratch_dir() + "/does_not_exist.png";
     EXPECT_THROW(read_image(missing), Error);

@@ -1,5 +1,6 @@
 #include <tdf/core/error.h>
 #include <tdf/render/scene_assets.h>
+#include <tdf/tactile/tactile_map.h>
 
 #include "common/test_paths.h"
 
@@ -91,10 +92,10 @@ TEST(SceneAssets, NormalMapDecodingFollowsSpec) {
     png.at(0, 0, 0) = 127.f / 255.f;
     png.at(0, 0, 1) = 128.f / 255.f;
     png.at(0, 0, 2) = 1.f;
-    const Image n = decode_normal_map(png, "x.png");
+    const Image n = decode_tactile_map(png, {}, "x.png").normals;
     ASSERT_EQ(n.channels(), 3);
     EXPECT_NEAR(n.at(0, 0, 0), -0.00392f, 1e-5f);  // spec 1.3: 127 -> -0.00392
     EXPECT_NEAR(n.at(0, 0, 1), 0.00392f, 1e-5f);
     EXPECT_FLOAT_EQ(n.at(0, 0, 2), 1.f);
-    EXPECT_THROW(decode_normal_map(Image(1, 1, 1), "gray.png"), Error);
+    EXPECT_THROW(decode_tactile_map(Image(1, 1, 1), {}, "gray.png"), Error);
 }

@@ -108,9 +108,5 @@ private:
     std::vector<Variant> m_variants;
 };
 
-/// Reads a tangent-space normal map file as 3-channel vectors: PNG/JPEG as 2 * value - 1 (the
-/// reference's rgb / 127.5 - 1), EXR as stored; extra channels (alpha) are dropped. Throws
-/// tdf::Error naming the file when it has fewer than 3 channels.
-Image read_normal_map(const std::string& path);
 
 }  // namespace tdf

@@ -3,6 +3,7 @@
 /// backward (vector-Jacobian product): TBN composition (spec 3.3), view-space rotation (spec
 /// 3.5) and the training renderer's Lambert shade (spec 3.4). All inline: the trainer calls
 /// them per pixel.
+#include <tdf/core/tangent_frame.h>
 #include <tdf/core/vec.h>
 
 #include <algorithm>
@@ -19,20 +20,7 @@ inline Vec3f normalize_backward(Vec3f x, Vec3f g, float min_length) {
     return (g - n * dot(n, g)) / len;
 }
 
-/// Per-pixel surface frame: unit tangent T (dP/du), unit normal N and the chart's handedness
-/// w = +1 or -1 (our fix of spec 13.17; the reference always uses +1).
-struct TangentFrame {
-    Vec3f tangent;
-    Vec3f normal;
-    float handedness = 1.0f;
-};
-
-/// Unnormalized TBN product T px + w (N x T) py + N pz for tangent-space normal p.
-inline Vec3f tbn_product(const TangentFrame& f, Vec3f p) {
-    return f.tangent * p.x + cross(f.normal, f.tangent) * (f.handedness * p.y) + f.normal * p.z;
-}
-
-/// World shading normal n_s = normalize(T px + w (N x T) py + N pz) (spec 3.3, the
+/// World shading normal n_s = normalize(tbn_product(f, p)) (spec 3.3, the
 /// reference's safe_normalize: x / sqrt(max(|x|^2, 1e-20))).
 inline Vec3f compose_shading_normal(const TangentFrame& f, Vec3f p) {
     return safe_normalize(tbn_product(f, p));
@@ -41,8 +29,7 @@ inline Vec3f compose_shading_normal(const TangentFrame& f, Vec3f p) {
 /// dL/dp from dL/dn_s for compose_shading_normal (the frame is a constant).
 inline Vec3f compose_shading_normal_backward(const TangentFrame& f, Vec3f p, Vec3f d_shading_normal) {
     const Vec3f d_raw = normalize_backward(tbn_product(f, p), d_shading_normal, 1e-10f);
-    const Vec3f bitangent = cross(f.normal, f.tangent) * f.handedness;
-    return {dot(f.tangent, d_raw), dot(bitangent, d_raw), dot(f.normal, d_raw)};
+    return {dot(f.tangent, d_raw), dot(frame_bitangent(f), d_raw), dot(f.normal, d_raw)};
 }
 
 /// The camera's axes in world coordinates: right, up and backward (OpenGL camera space: x right,

@@ -13,6 +13,19 @@ struct TactileLayoutTransform {
     float uv_scale = 1.0f;
 };
 
+/// A texel's first three channels as RGB, or grey for 1-2 channel textures.
+inline Vec3f texel_rgb(const MipTexture& texture, const float* texel) {
+    return texture.channels() >= 3 ? Vec3f{texel[0], texel[1], texel[2]} : Vec3f{texel[0], texel[0], texel[0]};
+}
+
+/// The mesh's vertex colour interpolated at pixel `i` (a hit) with the hit's barycentrics.
+inline Vec3f vertex_color_at(const TriangleMesh& mesh, const GBuffer& g, std::size_t i) {
+    const Vec3i& t = mesh.triangles[std::size_t(g.triangle[i])];
+    const Vec2f b = g.barycentric[i];
+    return mesh.colors[std::size_t(t.x)] * (1.f - b.x - b.y) + mesh.colors[std::size_t(t.y)] * b.x +
+           mesh.colors[std::size_t(t.z)] * b.y;
+}
+
 /// Albedo of pixel `i` (a hit) from the material's source: texture (trilinear over the whole
 /// pyramid when `mipmapped`, else bilinear), vertex colours (barycentric) or the constant.
 Vec3f sample_albedo(const SurfaceMaterial& material, const TriangleMesh& mesh, const GBuffer& g, std::size_t i,

@@ -33,9 +33,6 @@ struct SceneAssets {
 /// 1.2). Throws tdf::Error naming the scene and the file on missing or bad input.
 std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& description);
 
-/// Decodes an 8-bit tangent-space normal map read as value/255 into [-1, 1]: x * 2 - 1, not
-/// renormalised (spec 1.3). Keeps the first 3 channels; needs at least 3.
-Image decode_normal_map(const Image& image, const std::string& source);
 
 /// The light of view `index` (LightSpec modes). magic3d draws from
 /// Rng::stream(seed, 0x4c49474854 + index) so lights and views have separate streams.

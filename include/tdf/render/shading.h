@@ -1,6 +1,7 @@
 #pragma once
 /// Tangent-frame composition and the two lighting models (training spec 3.4, visualizer 3.9).
 #include <tdf/core/rng.h>
+#include <tdf/core/tangent_frame.h>
 #include <tdf/core/vec.h>
 
 namespace tdf {
@@ -8,9 +9,7 @@ namespace tdf {
 /// shading_normal() before its final normalisation (the visualizer's unnormalised
 /// viewspace_normal, spec 3.9 / 13.19).
 inline Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {
-    // -B = -normalize(T x N) = normalize(N x T).
-    const Vec3f bitangent = safe_normalize(cross(N, T)) * w;
-    return T * p.x + bitangent * p.y + N * p.z;
+    return tbn_product(TangentFrame{T, N, w}, p);
 }
 
 /// World shading normal from a tangent-space normal p (spec 3.3):
@@ -21,16 +20,6 @@ inline Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {
 /// Uses safe_normalize, so a zero frame (background) gives a zero vector. Inline: per pixel.
 inline Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f tangent_space_normal) {
     return safe_normalize(shading_normal_unnormalized(T, N, w, tangent_space_normal));
-}
-
-// Inline: called per pixel.
-inline Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {
-    // -B = -normalize(T x N) = normalize(N x T).
-    const Vec3f bitangent = safe_normalize(cross(N, T)) * w;
-    return T * p.x + bitangent * p.y + N * p.z;
-}
-inline Vec3f shading_normal(Vec3f T, Vec3f N, float w, Vec3f p) {
-    return safe_normalize(shading_normal_unnormalized(T, N, w, p));
 }
 
 /// The training renderer's `magic3d` point-light sample (spec 3.4). Three draws in the
