@@ -1,5 +1,6 @@
 #include <tdf/render/scene_assets.h>
 
+#include <tdf/atlas/uv_atlas.h>
 #include <tdf/tactile/tactile_map.h>
 
 #include <tdf/core/error.h>
@@ -30,6 +31,17 @@ std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
     if (!std::filesystem::exists(d.mesh)) throw_error("{}: mesh '{}' does not exist", d.path, d.mesh);
     assets->mesh = load_mesh(d.mesh, options);
     if (d.normalize) normalize_mesh(assets->mesh, d.normalize_bound);
+    const bool maps_need_uvs = !d.tactile_images.empty() || !d.label_map.empty();
+    if (maps_need_uvs && !assets->mesh.has_uvs() && d.albedo_source != "image") {
+        // Vertex-coloured meshes from image-to-3D tools have no UVs (spec 13.9): give them an atlas
+        // so the tactile map has somewhere to go.
+        log_info("{}: the mesh has no UVs; unwrapping it with `tdf atlas`'s defaults (run `tdf atlas` to choose "
+                 "the settings)", d.mesh);
+        AtlasReport report;
+        assets->mesh = build_atlas(assets->mesh, AtlasOptions{}, &report);
+        log_info("atlas: {} charts, {:.1f} % of texels used, {:.2f} s", report.chart_count,
+                 100.0 * report.utilisation, report.seconds);
+    }
     assets->scene = std::make_unique<EmbreeScene>(assets->mesh);
 
     using Source = SurfaceMaterial::AlbedoSource;

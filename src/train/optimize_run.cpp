@@ -1,6 +1,5 @@
 #include <tdf/train/optimize_run.h>
 
-#include <tdf/atlas/uv_atlas.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
@@ -89,20 +88,6 @@ void run_optimize(const OptimizeOptions& options) {
     ensure_folder(options.output_dir);
 
     std::unique_ptr<SceneAssets> assets = load_scene_assets(description);
-    if (!assets->mesh.has_uvs()) {
-        if (assets->material.albedo_source == SurfaceMaterial::AlbedoSource::Texture)
-            throw_error("{}: the mesh has an albedo texture but no UVs", description.mesh);
-        log_info("{}: the mesh has no UVs; unwrapping it with the default atlas (run `tdf atlas` to choose the "
-                 "settings)", description.mesh);
-        AtlasOptions atlas_options;
-        atlas_options.size = config.texture_size;
-        AtlasReport report;
-        assets->mesh = build_atlas(assets->mesh, atlas_options, &report);
-        assets->scene = std::make_unique<EmbreeScene>(assets->mesh);
-        log_info("atlas: {} charts, {:.1f} % of texels used, {:.2f} s", report.chart_count, 100 * report.utilisation,
-                 report.seconds);
-    }
-
     TrainingTarget target;
     target.mesh = &assets->mesh;
     target.scene = assets->scene.get();

@@ -6,6 +6,8 @@
 #include <tdf/core/parallel.h>
 #include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_io.h>
+#include <tdf/mesh/mesh_writer.h>
+#include <tdf/scene/procedural_mesh.h>
 #include <tdf/train/optimize_run.h>
 #include <tdf/train/trainer.h>
 
@@ -13,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 using namespace tdf;
@@ -178,4 +181,70 @@ TEST(Optimize, PhysicalLayoutScaleFromAreas) {
     quad.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
     quad.uv_triangles = quad.triangles;
     EXPECT_NEAR(physical_tactile_uv_scale(quad, 10.0f, 100, 0.05f), 4.0f, 1e-5f);
+}
+
+// The documented real-data scenes (spot + avocado sample, glTF avocado + avocado sample, mug +
+// crochet sample) run end to end at a small size and export finite maps.
+class SharedDataScene : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SharedDataScene, OptimizesAndExports) {
+    TDF_REQUIRE_SHARED_DATA("meshes");
+    const std::string scene = std::string("scenes/") + GetParam() + "/scene.json";
+    OptimizeOptions options;
+    options.scene_path = test::source_dir() + "/" + scene;
+    options.overrides = small_run(4, 2);
+    options.output_dir = test::scratch_dir() + "/shared_" + GetParam();
+    fs::remove_all(options.output_dir);
+    run_optimize(options);
+    const std::string base = options.output_dir + "/" + GetParam();
+    const Image albedo = read_image(base + "_albedo.exr");
+    const Image normals = read_image(base + "_tactile_normal.exr");
+    EXPECT_TRUE(albedo.all_finite());
+    EXPECT_TRUE(normals.all_finite());
+    EXPECT_TRUE(fs::exists(base + ".glb"));
+    const Json report = parse_json(read_text_file(base + "_report.json"), base);
+    EXPECT_TRUE(std::isfinite(report["quality"]["albedo_psnr_foreground_db"].get<double>()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Optimize, SharedDataScene, ::testing::Values("spot", "avocado", "mug"));
+
+TEST(Optimize, GreyHeightMapAsTactileMapIsAClearError) {
+    const std::string grey = test::scratch_dir() + "/grey_height.png";
+    Image image(16, 16, 3);
+    for (std::size_t i = 0; i < image.pixel_count(); ++i) std::fill_n(image.data() + 3 * i, 3, float(i % 7) / 7.0f);
+    write_png(grey, image);
+    try {
+        run_into("grey", {"tactile.images=[\"" + grey + "\"]"});
+        FAIL() << "a height map was accepted as a normal map";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("grey height map"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Optimize, MeshWithoutUvsIsUnwrappedAutomatically) {
+    TriangleMesh sphere = make_uv_sphere(0.8f, 16, 8, TangentMode::Handed);
+    sphere.uvs.clear();
+    sphere.uv_triangles.clear();
+    const std::string folder = test::scratch_dir() + "/no_uvs";
+    fs::create_directories(folder);
+    write_obj(folder + "/sphere.obj", sphere, ObjMaterial{});
+    const std::string scene = folder + "/scene.json";
+    write_text_atomically(scene, "{\"mesh\": \"sphere.obj\", \"albedo\": {\"source\": \"constant\"}, "
+                                 "\"tactile\": {\"images\": [\"" + test::source_dir() +
+                                     "/scenes/pebble_sphere/tactile_normal.png\"]}}");
+    OptimizeOptions options;
+    options.scene_path = scene;
+    options.overrides = small_run(2, 1);
+    options.output_dir = folder + "/out";
+    run_optimize(options);
+    const TriangleMesh exported = load_mesh(options.output_dir + "/no_uvs.obj");
+    EXPECT_TRUE(exported.has_uvs());
+}
+
+TEST(Optimize, UnwritableOutputIsAClearError) {
+    OptimizeOptions options;
+    options.scene_path = kScene;
+    options.overrides = small_run(2, 1);
+    options.output_dir = "/proc/tdf_cannot_write_here";
+    EXPECT_THROW(run_optimize(options), Error);
 }
