@@ -1,11 +1,13 @@
 #include <tdf/atlas/chart_packing.h>
 
+#include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <numeric>
 
 namespace tdf {
@@ -15,28 +17,6 @@ namespace {
 struct P2 {
     double x, y;
 };
-
-double cross2(P2 o, P2 a, P2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
-
-// Andrew's monotone chain; returns the hull counter-clockwise (may be 1 or 2 points).
-std::vector<P2> convex_hull(std::vector<P2> points) {
-    std::sort(points.begin(), points.end(), [](P2 a, P2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
-    points.erase(std::unique(points.begin(), points.end(), [](P2 a, P2 b) { return a.x == b.x && a.y == b.y; }),
-                 points.end());
-    if (points.size() < 3) return points;
-    std::vector<P2> hull(2 * points.size());
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        while (k >= 2 && cross2(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
-        hull[k++] = points[i];
-    }
-    for (std::size_t i = points.size() - 1, t = k + 1; i > 0; --i) {
-        while (k >= t && cross2(hull[k - 2], hull[k - 1], points[i - 1]) <= 0) --k;
-        hull[k++] = points[i - 1];
-    }
-    hull.resize(k - 1);
-    return hull;
-}
 
 // A chart turned to its minimal-area bounding rectangle, with its lower-left corner at 0.
 struct PreparedChart {
@@ -51,7 +31,8 @@ PreparedChart prepare(const PackChart& chart) {
     std::vector<P2> points(chart.uvs.size());
     for (std::size_t i = 0; i < points.size(); ++i) points[i] = {chart.uvs[i].x, chart.uvs[i].y};
     // Rotating calipers, simplified: the best rectangle has a side on a hull edge.
-    const std::vector<P2> hull = convex_hull(points);
+    std::vector<P2> hull;
+    for (const Vec2f p : convex_hull(chart.uvs)) hull.push_back({p.x, p.y});
     double best_angle = 0, best_area = 1e300;
     for (std::size_t i = 0; i < hull.size() && hull.size() >= 3; ++i) {
         const P2 a = hull[i], b = hull[(i + 1) % hull.size()];
@@ -76,7 +57,7 @@ PreparedChart prepare(const PackChart& chart) {
     out.width = std::max(hi_x - lo_x, 0.0);
     out.height = std::max(hi_y - lo_y, 0.0);
     for (const Vec3i& t : out.triangles)
-        out.area += std::abs(cross2(out.points[std::size_t(t.x)], out.points[std::size_t(t.y)], out.points[std::size_t(t.z)])) * 0.5;
+        out.area += std::abs(signed_uv_area2(chart.uvs[std::size_t(t.x)], chart.uvs[std::size_t(t.y)], chart.uvs[std::size_t(t.z)])) * 0.5;
     return out;
 }
 
@@ -173,6 +154,16 @@ struct Placement {
 struct Span {
     int row, begin, length;
 };
+
+// Reverses the low `bits` bits of `v`: the order 0, h/2, h/4, 3h/4, ... over rows.
+unsigned reverse_bits(unsigned v, int bits) {
+    unsigned r = 0;
+    for (int i = 0; i < bits; ++i, v >>= 1) r = (r << 1) | (v & 1u);
+    return r;
+}
+
+// Spans in bit-reversed row order: a collision anywhere in the mask is found after testing a
+// few widely spaced rows rather than after sweeping up to it, which makes failed tests cheap.
 std::vector<Span> spans_of(const Mask& m) {
     std::vector<Span> spans;
     for (int y = 0; y < m.h; ++y)
@@ -185,6 +176,11 @@ std::vector<Span> spans_of(const Mask& m) {
             while (x < m.w && m.cells[std::size_t(y * m.w + x)]) ++x;
             spans.push_back({y, begin, x - begin});
         }
+    int bits = 0;
+    while ((1 << bits) < m.h) ++bits;
+    std::stable_sort(spans.begin(), spans.end(), [bits](const Span& a, const Span& b) {
+        return reverse_bits(unsigned(a.row), bits) < reverse_bits(unsigned(b.row), bits);
+    });
     return spans;
 }
 
@@ -242,32 +238,46 @@ bool lowest_fit(const FreeRuns& atlas, const Mask& m, const std::vector<Span>& s
     return false;
 }
 
+// A chart's masks at one scale, in its four quarter turns, with their spans.
+struct TurnedMasks {
+    Mask masks[4];
+    std::vector<Span> spans[4];
+};
+
+std::vector<TurnedMasks> rasterize_all(const std::vector<PreparedChart>& charts, double scale, int margin) {
+    std::vector<TurnedMasks> all(charts.size());
+    parallel_for(charts.size(), 4, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            all[i].masks[0] = rasterize_chart(charts[i], scale, margin);
+            for (int r = 1; r < 4; ++r) all[i].masks[r] = rotate(all[i].masks[r - 1]);
+            for (int r = 0; r < 4; ++r) all[i].spans[r] = spans_of(all[i].masks[r]);
+        }
+    });
+    return all;
+}
+
 // Places every chart (in `order`) at the lowest position over its four quarter turns, keeping
 // the top of the placed chart lowest; false when one does not fit.
-bool try_pack(const std::vector<PreparedChart>& charts, const std::vector<std::size_t>& order, double scale,
-              int size, int margin, std::vector<Placement>& placements) {
+bool try_pack(const std::vector<TurnedMasks>& charts, const std::vector<std::size_t>& order, int size,
+              std::vector<Placement>& placements) {
     FreeRuns atlas(size);
     placements.assign(charts.size(), Placement{});
     for (const std::size_t i : order) {
-        Mask masks[4];
-        masks[0] = rasterize_chart(charts[i], scale, margin);
-        for (int r = 1; r < 4; ++r) masks[r] = rotate(masks[r - 1]);
-        std::vector<Span> spans[4];
+        const TurnedMasks& chart = charts[i];
         int best_top = size + 1;
         Placement best;
         for (int r = 0; r < 4; ++r) {
-            const Mask& m = masks[r];
+            const Mask& m = chart.masks[r];
             if (m.w > size || m.h > size) continue;
-            spans[r] = spans_of(m);
             int x = 0, y = 0;
             // Only positions whose top would beat the best so far are worth scanning.
-            if (lowest_fit(atlas, m, spans[r], size, best_top - m.h, x, y) && y + m.h < best_top) {
+            if (lowest_fit(atlas, m, chart.spans[r], size, best_top - m.h, x, y) && y + m.h < best_top) {
                 best_top = y + m.h;
                 best = {x, y, r};
             }
         }
         if (best_top > size) return false;
-        atlas.occupy(spans[best.turns], best.x, best.y, masks[best.turns].h);
+        atlas.occupy(chart.spans[best.turns], best.x, best.y, chart.masks[best.turns].h);
         placements[i] = best;
     }
     return true;
@@ -281,40 +291,54 @@ double pack_charts(std::vector<PackChart>& charts, int size, int gutter) {
     parallel_for(charts.size(), 16, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) prepared[i] = prepare(charts[i]);
     });
-    std::vector<std::size_t> order(charts.size());
-    std::iota(order.begin(), order.end(), std::size_t(0));
-    // Largest first (by bounding-rectangle area, then area, then index: deterministic).
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        const double ra = prepared[a].width * prepared[a].height, rb = prepared[b].width * prepared[b].height;
-        return ra > rb;
-    });
+    // Three greedy orders, largest first by bounding-rectangle area, by longest side and by
+    // area (stable sorts: ties keep chart order). A scale counts as fitting when any order fits.
+    std::vector<std::vector<std::size_t>> orders(3, std::vector<std::size_t>(charts.size()));
+    const std::function<double(const PreparedChart&)> keys[3] = {
+        [](const PreparedChart& c) { return c.width * c.height; },
+        [](const PreparedChart& c) { return std::max(c.width, c.height); },
+        [](const PreparedChart& c) { return c.area; }};
+    for (int k = 0; k < 3; ++k) {
+        std::iota(orders[std::size_t(k)].begin(), orders[std::size_t(k)].end(), std::size_t(0));
+        std::stable_sort(orders[std::size_t(k)].begin(), orders[std::size_t(k)].end(),
+                         [&](std::size_t a, std::size_t b) { return keys[k](prepared[a]) > keys[k](prepared[b]); });
+    }
     double total_area = 0;
     for (const PreparedChart& c : prepared) total_area += c.area;
     const int margin = (gutter + 1) / 2;
-
-    // Find a scale that fits by shrinking from the 100 % utilisation bound, then bisect.
-    const double upper_bound = double(size) / std::sqrt(std::max(total_area, 1e-300));
     std::vector<Placement> placements, best_placements;
+    const auto fits = [&](double scale) {
+        const std::vector<TurnedMasks> masks = rasterize_all(prepared, scale, margin);
+        for (const auto& order : orders)
+            if (try_pack(masks, order, size, placements)) {
+                best_placements = placements;
+                return true;
+            }
+        return false;
+    };
+
+    // Shrink from 85 % utilisation in ~10 % area steps until everything fits, then bisect.
+    const double upper_bound = double(size) / std::sqrt(std::max(total_area, 1e-300));
     double fail = upper_bound, success = 0;
-    for (double s = upper_bound * 0.9; s > upper_bound * 1e-4; s *= 0.8) {
-        if (try_pack(prepared, order, s, size, margin, placements)) {
+    for (double s = upper_bound * std::sqrt(0.85); s > upper_bound * 1e-3; s *= std::sqrt(0.9)) {
+        if (fits(s)) {
             success = s;
-            best_placements = placements;
             break;
         }
         fail = s;
     }
-    if (success == 0 && try_pack(prepared, order, 0.0, size, margin, placements)) best_placements = placements;
-    else if (success == 0)
+    if (success == 0)
         throw_error("atlas: {} charts do not fit into {}x{} texels with a {}-texel gutter; use a larger --size or a "
-                    "smaller --gutter", charts.size(), size, size, gutter);
-    for (int iteration = 0; iteration < 8 && success > 0 && fail / success > 1.002; ++iteration) {
+                    "smaller --gutter",
+                    charts.size(), size, size, gutter);
+    for (int iteration = 0; iteration < 7 && fail / success > 1.002; ++iteration) {
         const double s = std::sqrt(success * fail);
-        if (try_pack(prepared, order, s, size, margin, placements)) {
+        std::vector<Placement> kept = best_placements;
+        if (fits(s)) {
             success = s;
-            best_placements = placements;
         } else {
             fail = s;
+            best_placements = std::move(kept);
         }
     }
 

@@ -251,6 +251,45 @@ std::vector<std::vector<int>> split_in_two(const Surface& s, const std::vector<i
     return {a, b};
 }
 
+enum class ChartCheck { Ok, TooStretched, Invalid };
+
+// A chart filling less of its convex hull than this (a thin arc, a ring with an appendage) wastes
+// atlas space around it: it is split. Charts of fewer faces are left alone.
+constexpr double kMinHullFill = 0.35;
+constexpr std::size_t kMinFacesToSplitSparse = 16;
+
+// Charts up to this size may be re-flattened with ARAP (about 1 s per 20k faces here).
+constexpr std::size_t kArapMaxFaces = 20000;
+
+// Un-mirrors a flattened chart that came out clockwise, scales it to its 3-D area, and checks
+// it: every triangle counter-clockwise, no self-overlap, L2 stretch within the bound.
+ChartCheck orient_scale_and_check(const Surface& s, const std::vector<int>& faces, const std::vector<Vec3f>& positions,
+                                  const std::vector<Vec3i>& corners, const AtlasOptions& options, std::vector<Vec2f>& uvs) {
+    double uv_area2 = 0, area3 = 0;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+        const Vec3i c = corners[i];
+        uv_area2 += signed_uv_area2(uvs[std::size_t(c.x)], uvs[std::size_t(c.y)], uvs[std::size_t(c.z)]);
+        area3 += s.area[std::size_t(faces[i])];
+    }
+    if (!(std::abs(uv_area2) > 0)) return ChartCheck::Invalid;
+    if (uv_area2 < 0)
+        for (Vec2f& uv : uvs) uv.x = -uv.x;
+    const float scale = float(std::sqrt(area3 / (0.5 * std::abs(uv_area2))));
+    for (Vec2f& uv : uvs) uv = uv * scale;
+    double stretch_sum = 0;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+        const Vec3i c = corners[i];
+        const std::array<Vec2f, 3> p = {uvs[std::size_t(c.x)], uvs[std::size_t(c.y)], uvs[std::size_t(c.z)]};
+        if (!(signed_uv_area2(p[0], p[1], p[2]) > 0)) return ChartCheck::Invalid;
+        const std::array<Vec3f, 3> q = {positions[std::size_t(c.x)], positions[std::size_t(c.y)], positions[std::size_t(c.z)]};
+        stretch_sum += l2_stretch_squared(q, p) * s.area[std::size_t(faces[i])];
+    }
+    // Ten times stricter than the report's tolerance, so that rounding packed UVs to float
+    // cannot turn a pinched border into a reported overlap.
+    if (count_overlapping_pairs(uvs, corners, true, 0.1 * kOverlapTolerance) > 0) return ChartCheck::Invalid;
+    return std::sqrt(stretch_sum / area3) > double(options.max_stretch) ? ChartCheck::TooStretched : ChartCheck::Ok;
+}
+
 FlattenOutcome flatten(const Surface& s, const std::vector<int>& faces, const AtlasOptions& options) {
     FlattenOutcome out;
     const std::size_t n = faces.size();
@@ -322,32 +361,24 @@ FlattenOutcome flatten(const Surface& s, const std::vector<int>& faces, const At
     // Euler characteristic V - E + F must be 1 for a disk (connected, one border).
     const std::size_t edges = internal_halfedges / 2 + (3 * n - internal_halfedges);
     if (long(local_positions.size()) - long(edges) + long(n) != 1) return fail();
-    if (!flatten_chart(local_positions, chart.corners, options.flattening == ChartFlattening::Arap, chart.uvs))
-        return fail();
-
-    // Orientation: un-mirror a chart that came out clockwise; any remaining flip fails it.
-    double uv_area2 = 0, area3 = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3i c = chart.corners[i];
-        uv_area2 += signed_uv_area2(chart.uvs[std::size_t(c.x)], chart.uvs[std::size_t(c.y)], chart.uvs[std::size_t(c.z)]);
-        area3 += s.area[std::size_t(faces[i])];
+    if (!flatten_chart(local_positions, chart.corners, false, chart.uvs)) return fail();
+    ChartCheck check = orient_scale_and_check(s, faces, local_positions, chart.corners, options, chart.uvs);
+    // ARAP only where conformal flattening stretches too much: it costs ~3x LSCM per solve.
+    if (check == ChartCheck::TooStretched && options.flattening == ChartFlattening::Arap && n <= kArapMaxFaces) {
+        std::vector<Vec2f> arap_uvs;
+        if (flatten_chart(local_positions, chart.corners, true, arap_uvs) &&
+            orient_scale_and_check(s, faces, local_positions, chart.corners, options, arap_uvs) == ChartCheck::Ok) {
+            chart.uvs = std::move(arap_uvs);
+            check = ChartCheck::Ok;
+        }
     }
-    if (uv_area2 < 0)
-        for (Vec2f& uv : chart.uvs) uv.x = -uv.x;
-    if (!(std::abs(uv_area2) > 0)) return fail();
-    const float scale = float(std::sqrt(area3 / (0.5 * std::abs(uv_area2))));
-    for (Vec2f& uv : chart.uvs) uv = uv * scale;
-    double stretch_sum = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3i c = chart.corners[i];
-        const std::array<Vec2f, 3> p = {chart.uvs[std::size_t(c.x)], chart.uvs[std::size_t(c.y)], chart.uvs[std::size_t(c.z)]};
-        if (!(signed_uv_area2(p[0], p[1], p[2]) > 0)) return fail();
-        const std::array<Vec3f, 3> q = {local_positions[std::size_t(c.x)], local_positions[std::size_t(c.y)],
-                                        local_positions[std::size_t(c.z)]};
-        stretch_sum += l2_stretch_squared(q, p) * s.area[std::size_t(faces[i])];
+    if (check != ChartCheck::Ok) return fail();
+    if (n >= kMinFacesToSplitSparse) {
+        double area = 0;
+        for (const Vec3i& c : chart.corners)
+            area += 0.5 * signed_uv_area2(chart.uvs[std::size_t(c.x)], chart.uvs[std::size_t(c.y)], chart.uvs[std::size_t(c.z)]);
+        if (area < kMinHullFill * polygon_area(convex_hull(chart.uvs))) return fail();
     }
-    if (std::sqrt(stretch_sum / area3) > double(options.max_stretch)) return fail();
-    if (count_overlapping_pairs(chart.uvs, chart.corners, true) > 0) return fail();
     out.ok = true;
     return out;
 }
@@ -465,8 +496,13 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
     if (!unwrap) {
         out = mesh;
     } else {
+        const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+            return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+        };
         const Surface surface = analyse_surface(mesh);
         std::vector<std::vector<int>> pending = grow_charts(surface, options);
+        log_verbose("atlas: {} charts grown in {:.2f} s", pending.size(), seconds_since(start));
+        const auto flatten_start = std::chrono::steady_clock::now();
         std::vector<FlatChart> charts;
         // Rounds of parallel flattening; failed charts come back split. Results are collected
         // in list order, so the atlas does not depend on the thread count.
@@ -484,7 +520,10 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
             }
             pending.swap(next);
         }
+        log_verbose("atlas: {} charts flattened in {:.2f} s", charts.size(), seconds_since(flatten_start));
+        const auto pack_start = std::chrono::steady_clock::now();
         out = assemble(mesh, surface, charts, options);
+        log_verbose("atlas: packed in {:.2f} s", seconds_since(pack_start));
         if (out.normals.size() != out.positions.size()) compute_normals(out);
         compute_tangents(out, TangentMode::Handed);
     }

@@ -58,6 +58,34 @@ AngleDistortion angle_distortion(const std::array<Vec3f, 3>& q, const std::array
     return result;
 }
 
+std::vector<Vec2f> convex_hull(std::vector<Vec2f> points) {
+    std::sort(points.begin(), points.end(), [](Vec2f a, Vec2f b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+    points.erase(std::unique(points.begin(), points.end(), [](Vec2f a, Vec2f b) { return a.x == b.x && a.y == b.y; }),
+                 points.end());
+    if (points.size() < 3) return points;
+    std::vector<Vec2f> hull(2 * points.size());
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        while (k >= 2 && signed_uv_area2(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+        hull[k++] = points[i];
+    }
+    for (std::size_t i = points.size() - 1, lower = k + 1; i > 0; --i) {
+        while (k >= lower && signed_uv_area2(hull[k - 2], hull[k - 1], points[i - 1]) <= 0) --k;
+        hull[k++] = points[i - 1];
+    }
+    hull.resize(k - 1);
+    return hull;
+}
+
+double polygon_area(const std::vector<Vec2f>& polygon) {
+    double twice = 0;
+    for (std::size_t i = 0; i < polygon.size(); ++i) {
+        const Vec2f a = polygon[i], b = polygon[(i + 1) % polygon.size()];
+        twice += double(a.x) * b.y - double(b.x) * a.y;
+    }
+    return 0.5 * twice;
+}
+
 namespace {
 
 struct UvTriangle {
@@ -66,7 +94,7 @@ struct UvTriangle {
 };
 
 // True when the interiors of a and b overlap (no separating axis among the 6 edge normals).
-bool interiors_overlap(const UvTriangle& a, const UvTriangle& b) {
+bool interiors_overlap(const UvTriangle& a, const UvTriangle& b, double tolerance) {
     const double size = std::max({a.max_x - a.min_x, a.max_y - a.min_y, b.max_x - b.min_x, b.max_y - b.min_y});
     for (const UvTriangle* t : {&a, &b})
         for (int k = 0; k < 3; ++k) {
@@ -82,7 +110,7 @@ bool interiors_overlap(const UvTriangle& a, const UvTriangle& b) {
                 b_lo = std::min(b_lo, pb);
                 b_hi = std::max(b_hi, pb);
             }
-            if (std::min(a_hi, b_hi) - std::max(a_lo, b_lo) <= 1e-6 * size * norm) return false;
+            if (std::min(a_hi, b_hi) - std::max(a_lo, b_lo) <= tolerance * size * norm) return false;
         }
     return true;
 }
@@ -90,7 +118,7 @@ bool interiors_overlap(const UvTriangle& a, const UvTriangle& b) {
 }  // namespace
 
 std::size_t count_overlapping_pairs(const std::vector<Vec2f>& uvs, const std::vector<Vec3i>& triangles,
-                                    bool stop_at_first) {
+                                    bool stop_at_first, double tolerance) {
     std::vector<UvTriangle> tris;
     tris.reserve(triangles.size());
     double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
@@ -149,7 +177,7 @@ std::size_t count_overlapping_pairs(const std::vector<Vec2f>& uvs, const std::ve
                     if (cell_of(std::max(a.min_x, b.min_x), lo_x, cell_x) != cx ||
                         cell_of(std::max(a.min_y, b.min_y), lo_y, cell_y) != cy)
                         continue;
-                    if (interiors_overlap(a, b)) {
+                    if (interiors_overlap(a, b, tolerance)) {
                         ++count;
                         if (stop_at_first) return count;
                     }

@@ -8,7 +8,7 @@
 ///  2. Grow charts from seeds over the remaining edges, always taking the candidate face whose
 ///     normal is closest to the chart's mean normal (ties: nearest to the seed), stopping at a
 ///     normal-cone bound (`cone_angle`). This keeps charts nearly developable.
-///  3. Flatten each chart with CGAL (LSCM, optionally refined by ARAP), then check it: a topological
+///  3. Flatten each chart with CGAL (LSCM; ARAP when LSCM stretches too much), then check it: a topological
 ///     disk, every triangle positively oriented (a chart whose triangles all come out clockwise is
 ///     un-mirrored by flipping u; a mix is rejected), no self-overlap, and L2 stretch within
 ///     `max_stretch`. A chart that fails is cut in two across its longest axis and retried, down
@@ -29,8 +29,10 @@
 namespace tdf {
 
 enum class ChartFlattening {
-    Lscm,  ///< least-squares conformal maps (fast; preserves angles, may scale areas)
-    Arap,  ///< as-rigid-as-possible (CGAL ARAP, initialised with LSCM): closer to isometric, ~3x slower
+    Lscm,  ///< least-squares conformal maps only (fast; preserves angles, may scale areas)
+    /// LSCM, then, for a chart whose LSCM stretch exceeds the bound (and that has at most 20k
+    /// faces), CGAL ARAP (initialised with LSCM, closer to isometric) before splitting it
+    Arap,
 };
 
 struct AtlasOptions {
@@ -75,9 +77,9 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
 /// Throws tdf::Error when the mesh has no UVs.
 AtlasReport measure_atlas(const TriangleMesh& mesh, int size);
 
-/// Number of pairs of UV triangles whose interiors overlap (touching edges and corners do not
-/// count; zero-area UV triangles are ignored). Exact separating-axis test in double precision,
-/// with a uniform grid to find candidate pairs.
+/// Number of pairs of UV triangles whose interiors overlap (count_overlapping_pairs: touching
+/// edges and corners do not count, nor depths below kOverlapTolerance of the pair's size;
+/// zero-area UV triangles are ignored).
 std::size_t count_uv_overlaps(const TriangleMesh& mesh);
 
 /// The report as a JSON object (keys as in AtlasReport).
