@@ -22,6 +22,7 @@ struct AtlasCommandOptions {
     std::string input;
     std::string output;
     std::string report_path;
+    std::string texture;
     bool bake_albedo = false;
     AtlasOptions atlas;
 };
@@ -30,7 +31,11 @@ int run_atlas(const AtlasCommandOptions& o) {
     namespace fs = std::filesystem;
     const std::string ext = lower_extension(o.output);
     if (ext != ".obj" && ext != ".glb") throw_error("-o {}: the output must be .obj or .glb", o.output);
-    const TriangleMesh mesh = load_mesh(o.input);
+    TriangleMesh mesh = load_mesh(o.input);
+    if (!o.texture.empty()) {
+        mesh.albedo = read_image(o.texture);
+        mesh.albedo_path = o.texture;
+    }
     AtlasReport report;
     const TriangleMesh atlas = build_atlas(mesh, o.atlas, &report);
 
@@ -87,6 +92,8 @@ Command register_atlas(CLI::App& root) {
     app->add_flag("--bake-albedo", options->bake_albedo,
                   "bake vertex colours (or re-bake the mesh's texture) into <output>_albedo.png (embedded for .glb)");
     app->add_option("--report", options->report_path, "also write the atlas report as JSON to this file");
+    app->add_option("--texture", options->texture,
+                    "albedo texture laid out by the input's UVs (default: the material's map_Kd), for --bake-albedo");
     app->add_option("--sharp-angle", options->atlas.sharp_angle, "degrees: dihedral angles above this always cut charts")
         ->capture_default_str();
     app->add_option("--cone-angle", options->atlas.cone_angle,

@@ -384,12 +384,12 @@ FlattenOutcome flatten(const Surface& s, const std::vector<int>& faces, const At
 }
 
 void validate_options(const AtlasOptions& o) {
-    if (o.size < 16 || o.size > 16384) throw_error("atlas: --size {} is out of range [16, 16384]", o.size);
-    if (o.gutter < 0 || o.gutter > 64) throw_error("atlas: --gutter {} is out of range [0, 64]", o.gutter);
+    if (o.size < 16 || o.size > 16384) throw_error("atlas size {} is out of range [16, 16384] texels", o.size);
+    if (o.gutter < 0 || o.gutter > 64) throw_error("atlas gutter {} is out of range [0, 64] texels", o.gutter);
     if (!(o.sharp_angle > 0 && o.sharp_angle <= 180))
-        throw_error("atlas: sharp angle {} is out of range (0, 180] degrees", o.sharp_angle);
-    if (!(o.cone_angle > 0 && o.cone_angle < 90)) throw_error("atlas: cone angle {} is out of range (0, 90) degrees", o.cone_angle);
-    if (!(o.max_stretch >= 1)) throw_error("atlas: maximum stretch {} must be at least 1", o.max_stretch);
+        throw_error("atlas sharp angle {} is out of range (0, 180] degrees", o.sharp_angle);
+    if (!(o.cone_angle > 0 && o.cone_angle < 90)) throw_error("atlas cone angle {} is out of range (0, 90) degrees", o.cone_angle);
+    if (!(o.max_stretch >= 1)) throw_error("atlas maximum stretch {} must be at least 1", o.max_stretch);
 }
 
 // Every face gets UVs: flattened charts, then zero-area faces glued to a chart they touch (their
