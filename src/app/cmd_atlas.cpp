@@ -102,9 +102,9 @@ Command register_atlas(CLI::App& root) {
     app->add_option("--max-stretch", options->atlas.max_stretch, "per-chart L2 stretch bound; charts above it are split")
         ->capture_default_str();
     const std::map<std::string, ChartFlattening> methods = {{"lscm", ChartFlattening::Lscm}, {"arap", ChartFlattening::Arap}};
-    app->add_option("--flattening", options->atlas.flattening, "chart flattening: lscm (conformal) or arap (near-isometric)")
+    app->add_option("--flattening", options->atlas.flattening, "chart flattening: lscm (conformal), or arap (LSCM, then ARAP for charts over the stretch bound)")
         ->transform(CLI::CheckedTransformer(methods, CLI::ignore_case))
-        ->default_str("arap");
+        ->default_str("lscm");
     command.app = app;
     command.run = [options] { return run_atlas(*options); };
     return command;

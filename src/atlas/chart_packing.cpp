@@ -189,10 +189,13 @@ std::vector<Span> spans_of(const Mask& m) {
 // c + run[y][c] can hold it either, which lets the scan skip ahead.
 class FreeRuns {
 public:
-    explicit FreeRuns(int size) : m_size(size), m_run(std::size_t(size) * std::size_t(size)), m_used(m_run.size(), 0) {
+    explicit FreeRuns(int size)
+        : m_size(size), m_run(std::size_t(size) * std::size_t(size)), m_used(m_run.size(), 0), m_longest(std::size_t(size)) {
         for (int y = 0; y < size; ++y) update_row(y);
     }
     int run(int x, int y) const { return m_run[std::size_t(y) * std::size_t(m_size) + std::size_t(x)]; }
+    /// The longest free run in row y: a quick test that rules out whole rows.
+    int longest_run(int y) const { return m_longest[std::size_t(y)]; }
     void occupy(const std::vector<Span>& spans, int x, int y, int h) {
         for (const Span& s : spans)
             std::fill_n(m_used.begin() + std::ptrdiff_t(std::size_t(y + s.row) * std::size_t(m_size) + std::size_t(x + s.begin)),
@@ -203,22 +206,32 @@ public:
 private:
     void update_row(int y) {
         const std::size_t base = std::size_t(y) * std::size_t(m_size);
-        int run = 0;
+        int run = 0, longest = 0;
         for (int x = m_size - 1; x >= 0; --x) {
             run = m_used[base + std::size_t(x)] ? 0 : run + 1;
             m_run[base + std::size_t(x)] = run;
+            longest = std::max(longest, run);
         }
+        m_longest[std::size_t(y)] = longest;
     }
     int m_size;
     std::vector<int> m_run;
     std::vector<std::uint8_t> m_used;
+    std::vector<int> m_longest;
 };
 
 // Lowest (then leftmost) position where the mask fits, scanning rows bottom-up with free-run
 // skips; false when it fits nowhere. Rows at or above `stop_y` are not scanned.
 bool lowest_fit(const FreeRuns& atlas, const Mask& m, const std::vector<Span>& spans, int size, int stop_y, int& fit_x,
                 int& fit_y) {
-    for (int y = 0; y + m.h <= size && y < stop_y; ++y)
+    for (int y = 0; y + m.h <= size && y < stop_y; ++y) {
+        bool possible = true;
+        for (const Span& s : spans)
+            if (atlas.longest_run(y + s.row) < s.length) {
+                possible = false;
+                break;
+            }
+        if (!possible) continue;
         for (int x = 0; x + m.w <= size;) {
             int skip = 0;
             for (const Span& s : spans) {
@@ -235,6 +248,7 @@ bool lowest_fit(const FreeRuns& atlas, const Mask& m, const std::vector<Span>& s
             }
             x += skip;
         }
+    }
     return false;
 }
 

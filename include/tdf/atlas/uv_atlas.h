@@ -41,8 +41,10 @@ struct AtlasOptions {
     bool reunwrap = false;           ///< replace existing UVs (a mesh without UVs is always unwrapped)
     float sharp_angle = 70.0f;       ///< degrees: dihedral angles above this always cut, (0, 180]
     float cone_angle = 70.0f;        ///< degrees: largest face-normal deviation from a chart's mean, (0, 90)
-    float max_stretch = 1.05f;       ///< per-chart L2 stretch bound (1 = isometric), >= 1
-    ChartFlattening flattening = ChartFlattening::Arap;
+    float max_stretch = 1.02f;       ///< per-chart L2 stretch bound (1 = isometric), >= 1
+    /// LSCM by default: with the tight stretch bound it gives lower stretch and better packing
+    /// than ARAP on the shared meshes (smaller charts pack tighter), and is 2-4x faster.
+    ChartFlattening flattening = ChartFlattening::Lscm;
 };
 
 /// Quality of a UV layout (measure_atlas), plus what build_atlas did.
