@@ -3,11 +3,10 @@
 // ../shared/data): ./build/bench/tdf_atlas_bench
 // Counters: utilisation (fraction of the 1024^2 texels covered), charts, mean L2 stretch,
 // overlaps. Timings are wall time on a shared machine: expect noise.
+#include <benchmark/benchmark.h>
 #include <tdf/atlas/uv_atlas.h>
 #include <tdf/core/error.h>
 #include <tdf/mesh/mesh_io.h>
-
-#include <benchmark/benchmark.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -27,7 +26,8 @@ TriangleMesh subdivide(const TriangleMesh& mesh) {
     const auto mid = [&](int a, int b) {
         const auto key = std::make_pair(std::min(a, b), std::max(a, b));
         const auto [it, inserted] = midpoint.emplace(key, int(out.positions.size()));
-        if (inserted) out.positions.push_back((mesh.positions[std::size_t(a)] + mesh.positions[std::size_t(b)]) * 0.5f);
+        if (inserted)
+            out.positions.push_back((mesh.positions[std::size_t(a)] + mesh.positions[std::size_t(b)]) * 0.5f);
         return it->second;
     };
     for (const Vec3i& t : mesh.triangles) {
@@ -62,7 +62,8 @@ std::string shared_data_dir() {
 void register_mesh(const std::string& name, const std::string& relative, int subdivisions = 0) {
     const std::string root = shared_data_dir();
     if (root.empty()) {
-        std::fprintf(stderr, "atlas bench: no ../shared/data (or $TDF_SHARED_DATA); skipping %s\n", name.c_str());
+        std::fprintf(
+            stderr, "atlas bench: no ../shared/data (or $TDF_SHARED_DATA); skipping %s\n", name.c_str());
         return;
     }
     try {
@@ -70,7 +71,8 @@ void register_mesh(const std::string& name, const std::string& relative, int sub
         options.load_textures = false;
         TriangleMesh mesh = load_mesh(root + "/" + relative, options);
         for (int i = 0; i < subdivisions; ++i) mesh = subdivide(mesh);
-        benchmark::RegisterBenchmark(name.c_str(), [mesh](benchmark::State& state) { run_atlas(state, mesh); })
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [mesh](benchmark::State& state) { run_atlas(state, mesh); })
             ->Unit(benchmark::kMillisecond)
             ->Iterations(1);
     } catch (const Error& e) {

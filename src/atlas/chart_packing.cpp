@@ -1,5 +1,4 @@
 #include <tdf/atlas/chart_packing.h>
-
 #include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
@@ -41,7 +40,8 @@ PreparedChart prepare(const PackChart& chart) {
         double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
         for (const P2 p : hull) {
             const double x = c * p.x - s * p.y, y = s * p.x + c * p.y;
-            lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x), lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
+            lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x), lo_y = std::min(lo_y, y),
+            hi_y = std::max(hi_y, y);
         }
         const double area = (hi_x - lo_x) * (hi_y - lo_y);
         if (area < best_area * (1 - 1e-9)) best_area = area, best_angle = angle;
@@ -50,14 +50,18 @@ PreparedChart prepare(const PackChart& chart) {
     double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
     for (P2& p : points) {
         p = {c * p.x - s * p.y, s * p.x + c * p.y};
-        lo_x = std::min(lo_x, p.x), hi_x = std::max(hi_x, p.x), lo_y = std::min(lo_y, p.y), hi_y = std::max(hi_y, p.y);
+        lo_x = std::min(lo_x, p.x), hi_x = std::max(hi_x, p.x), lo_y = std::min(lo_y, p.y),
+        hi_y = std::max(hi_y, p.y);
     }
     for (P2& p : points) p = {p.x - lo_x, p.y - lo_y};
     out.points = std::move(points);
     out.width = std::max(hi_x - lo_x, 0.0);
     out.height = std::max(hi_y - lo_y, 0.0);
     for (const Vec3i& t : out.triangles)
-        out.area += std::abs(signed_uv_area2(chart.uvs[std::size_t(t.x)], chart.uvs[std::size_t(t.y)], chart.uvs[std::size_t(t.z)])) * 0.5;
+        out.area +=
+            std::abs(signed_uv_area2(
+                chart.uvs[std::size_t(t.x)], chart.uvs[std::size_t(t.y)], chart.uvs[std::size_t(t.z)])) *
+            0.5;
     return out;
 }
 
@@ -70,7 +74,8 @@ struct Mask {
 // True when the closed triangle (a, b, c) touches the open cell square [x, x+1] x [y, y+1]
 // (separating axes: the cell's axes are covered by the caller's bounding box loop).
 bool triangle_touches_cell(const P2 (&t)[3], int x, int y) {
-    const P2 corners[4] = {{double(x), double(y)}, {x + 1.0, double(y)}, {double(x), y + 1.0}, {x + 1.0, y + 1.0}};
+    const P2 corners[4] = {
+        {double(x), double(y)}, {x + 1.0, double(y)}, {double(x), y + 1.0}, {x + 1.0, y + 1.0}};
     for (int k = 0; k < 3; ++k) {
         const P2 a = t[k], b = t[(k + 1) % 3];
         const double nx = a.y - b.y, ny = b.x - a.x;  // any normal of edge ab
@@ -98,7 +103,8 @@ Mask rasterize_chart(const PreparedChart& chart, double scale, int margin) {
     mask.cells.assign(std::size_t(mask.w) * std::size_t(mask.h), 0);
     const auto texel = [&](P2 p) { return P2{p.x * scale + margin, p.y * scale + margin}; };
     for (const Vec3i& tri : chart.triangles) {
-        const P2 t[3] = {texel(chart.points[std::size_t(tri.x)]), texel(chart.points[std::size_t(tri.y)]),
+        const P2 t[3] = {texel(chart.points[std::size_t(tri.x)]),
+                         texel(chart.points[std::size_t(tri.y)]),
                          texel(chart.points[std::size_t(tri.z)])};
         const int x0 = std::clamp(int(std::floor(std::min({t[0].x, t[1].x, t[2].x}))), 0, mask.w - 1);
         const int x1 = std::clamp(int(std::floor(std::max({t[0].x, t[1].x, t[2].x}))), 0, mask.w - 1);
@@ -133,7 +139,8 @@ Mask rotate(const Mask& m) {
     r.h = m.w;
     r.cells.assign(m.cells.size(), 0);
     for (int y = 0; y < m.h; ++y)
-        for (int x = 0; x < m.w; ++x) r.cells[std::size_t(x * r.w + (m.h - 1 - y))] = m.cells[std::size_t(y * m.w + x)];
+        for (int x = 0; x < m.w; ++x)
+            r.cells[std::size_t(x * r.w + (m.h - 1 - y))] = m.cells[std::size_t(y * m.w + x)];
     return r;
 }
 
@@ -190,7 +197,10 @@ std::vector<Span> spans_of(const Mask& m) {
 class FreeRuns {
 public:
     explicit FreeRuns(int size)
-        : m_size(size), m_run(std::size_t(size) * std::size_t(size)), m_used(m_run.size(), 0), m_longest(std::size_t(size)) {
+        : m_size(size),
+          m_run(std::size_t(size) * std::size_t(size)),
+          m_used(m_run.size(), 0),
+          m_longest(std::size_t(size)) {
         for (int y = 0; y < size; ++y) update_row(y);
     }
     int run(int x, int y) const { return m_run[std::size_t(y) * std::size_t(m_size) + std::size_t(x)]; }
@@ -198,8 +208,10 @@ public:
     int longest_run(int y) const { return m_longest[std::size_t(y)]; }
     void occupy(const std::vector<Span>& spans, int x, int y, int h) {
         for (const Span& s : spans)
-            std::fill_n(m_used.begin() + std::ptrdiff_t(std::size_t(y + s.row) * std::size_t(m_size) + std::size_t(x + s.begin)),
-                        s.length, std::uint8_t(1));
+            std::fill_n(m_used.begin() + std::ptrdiff_t(std::size_t(y + s.row) * std::size_t(m_size) +
+                                                        std::size_t(x + s.begin)),
+                        s.length,
+                        std::uint8_t(1));
         for (int r = y; r < y + h; ++r) update_row(r);
     }
 
@@ -222,8 +234,8 @@ private:
 
 // Lowest (then leftmost) position where the mask fits, scanning rows bottom-up with free-run
 // skips; false when it fits nowhere. Rows at or above `stop_y` are not scanned.
-bool lowest_fit(const FreeRuns& atlas, const Mask& m, const std::vector<Span>& spans, int size, int stop_y, int& fit_x,
-                int& fit_y) {
+bool lowest_fit(const FreeRuns& atlas, const Mask& m, const std::vector<Span>& spans, int size, int stop_y,
+                int& fit_x, int& fit_y) {
     for (int y = 0; y + m.h <= size && y < stop_y; ++y) {
         bool possible = true;
         for (const Span& s : spans)
@@ -314,8 +326,10 @@ double pack_charts(std::vector<PackChart>& charts, int size, int gutter) {
         [](const PreparedChart& c) { return c.area; }};
     for (int k = 0; k < 3; ++k) {
         std::iota(orders[std::size_t(k)].begin(), orders[std::size_t(k)].end(), std::size_t(0));
-        std::stable_sort(orders[std::size_t(k)].begin(), orders[std::size_t(k)].end(),
-                         [&](std::size_t a, std::size_t b) { return keys[k](prepared[a]) > keys[k](prepared[b]); });
+        std::stable_sort(
+            orders[std::size_t(k)].begin(), orders[std::size_t(k)].end(), [&](std::size_t a, std::size_t b) {
+                return keys[k](prepared[a]) > keys[k](prepared[b]);
+            });
     }
     double total_area = 0;
     for (const PreparedChart& c : prepared) total_area += c.area;
@@ -342,9 +356,13 @@ double pack_charts(std::vector<PackChart>& charts, int size, int gutter) {
         fail = s;
     }
     if (success == 0)
-        throw_error("atlas: {} charts do not fit into {}x{} texels with a {}-texel gutter; use a larger --size or a "
-                    "smaller --gutter",
-                    charts.size(), size, size, gutter);
+        throw_error(
+            "atlas: {} charts do not fit into {}x{} texels with a {}-texel gutter; use a larger --size or a "
+            "smaller --gutter",
+            charts.size(),
+            size,
+            size,
+            gutter);
     for (int iteration = 0; iteration < 7 && fail / success > 1.002; ++iteration) {
         const double s = std::sqrt(success * fail);
         std::vector<Placement> kept = best_placements;

@@ -36,7 +36,8 @@ double l2_stretch_squared(const std::array<Vec3f, 3>& q, const std::array<Vec2f,
     const double s0 = p[0].x, s1 = p[1].x, s2 = p[2].x, t0 = p[0].y, t1 = p[1].y, t2 = p[2].y;
     const D3 q0 = to_d3(q[0]), q1 = to_d3(q[1]), q2 = to_d3(q[2]);
     const auto combine = [&](double w0, double w1, double w2) {
-        return D3{(q0.x * w0 + q1.x * w1 + q2.x * w2) / area2, (q0.y * w0 + q1.y * w1 + q2.y * w2) / area2,
+        return D3{(q0.x * w0 + q1.x * w1 + q2.x * w2) / area2,
+                  (q0.y * w0 + q1.y * w1 + q2.y * w2) / area2,
                   (q0.z * w0 + q1.z * w1 + q2.z * w2) / area2};
     };
     const D3 ds = combine(t1 - t2, t2 - t0, t0 - t1);  // dq/du
@@ -48,8 +49,10 @@ AngleDistortion angle_distortion(const std::array<Vec3f, 3>& q, const std::array
     AngleDistortion result;
     for (int k = 0; k < 3; ++k) {
         const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-        const double a3 = corner_angle(to_d3(q[std::size_t(k)]), to_d3(q[std::size_t(k1)]), to_d3(q[std::size_t(k2)]));
-        const D3 a{p[std::size_t(k)].x, p[std::size_t(k)].y, 0}, b{p[std::size_t(k1)].x, p[std::size_t(k1)].y, 0},
+        const double a3 =
+            corner_angle(to_d3(q[std::size_t(k)]), to_d3(q[std::size_t(k1)]), to_d3(q[std::size_t(k2)]));
+        const D3 a{p[std::size_t(k)].x, p[std::size_t(k)].y, 0},
+            b{p[std::size_t(k1)].x, p[std::size_t(k1)].y, 0},
             c{p[std::size_t(k2)].x, p[std::size_t(k2)].y, 0};
         const double d = std::abs(corner_angle(a, b, c) - a3) * (180.0 / 3.14159265358979323846);
         result.max = std::max(result.max, d);
@@ -59,9 +62,12 @@ AngleDistortion angle_distortion(const std::array<Vec3f, 3>& q, const std::array
 }
 
 std::vector<Vec2f> convex_hull(std::vector<Vec2f> points) {
-    std::sort(points.begin(), points.end(), [](Vec2f a, Vec2f b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
-    points.erase(std::unique(points.begin(), points.end(), [](Vec2f a, Vec2f b) { return a.x == b.x && a.y == b.y; }),
-                 points.end());
+    std::sort(points.begin(), points.end(), [](Vec2f a, Vec2f b) {
+        return a.x < b.x || (a.x == b.x && a.y < b.y);
+    });
+    points.erase(
+        std::unique(points.begin(), points.end(), [](Vec2f a, Vec2f b) { return a.x == b.x && a.y == b.y; }),
+        points.end());
     if (points.size() < 3) return points;
     std::vector<Vec2f> hull(2 * points.size());
     std::size_t k = 0;
@@ -95,7 +101,8 @@ struct UvTriangle {
 
 // True when the interiors of a and b overlap (no separating axis among the 6 edge normals).
 bool interiors_overlap(const UvTriangle& a, const UvTriangle& b, double tolerance) {
-    const double size = std::max({a.max_x - a.min_x, a.max_y - a.min_y, b.max_x - b.min_x, b.max_y - b.min_y});
+    const double size =
+        std::max({a.max_x - a.min_x, a.max_y - a.min_y, b.max_x - b.min_x, b.max_y - b.min_y});
     for (const UvTriangle* t : {&a, &b})
         for (int k = 0; k < 3; ++k) {
             const int k1 = (k + 1) % 3;
@@ -172,7 +179,8 @@ std::size_t count_overlapping_pairs(const std::vector<Vec2f>& uvs, const std::ve
                 for (int g = e + 1; g < start[c + 1]; ++g) {
                     const UvTriangle& a = tris[std::size_t(entries[std::size_t(e)])];
                     const UvTriangle& b = tris[std::size_t(entries[std::size_t(g)])];
-                    if (a.max_x < b.min_x || b.max_x < a.min_x || a.max_y < b.min_y || b.max_y < a.min_y) continue;
+                    if (a.max_x < b.min_x || b.max_x < a.min_x || a.max_y < b.min_y || b.max_y < a.min_y)
+                        continue;
                     // Test each pair once: in the cell holding the low corner of the bounding-box overlap.
                     if (cell_of(std::max(a.min_x, b.min_x), lo_x, cell_x) != cx ||
                         cell_of(std::max(a.min_y, b.min_y), lo_y, cell_y) != cy)

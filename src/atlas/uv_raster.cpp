@@ -1,5 +1,4 @@
 #include <tdf/atlas/uv_raster.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 
@@ -15,7 +14,9 @@ struct Point {
 };
 
 // Twice the signed area of (a, b, p) in texel coordinates (x right, y down).
-double edge_function(Point a, Point b, Point p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
+double edge_function(Point a, Point b, Point p) {
+    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+}
 
 // Top-left rule for a triangle with positive edge functions inside: a centre exactly on an edge
 // is kept only for "top" or "left" edges, so two triangles sharing the edge never both claim it.
@@ -31,7 +32,8 @@ std::size_t UvRaster::covered_count() const {
 }
 
 UvRaster rasterize_uv(const TriangleMesh& mesh, int size) {
-    if (!mesh.has_uvs()) throw_error("{}: cannot rasterize the UV layout of a mesh without UVs", mesh.source_path);
+    if (!mesh.has_uvs())
+        throw_error("{}: cannot rasterize the UV layout of a mesh without UVs", mesh.source_path);
     if (size < 1 || size > 16384) throw_error("UV raster size {} is out of range [1, 16384]", size);
     UvRaster raster;
     raster.size = size;
@@ -66,7 +68,8 @@ UvRaster rasterize_uv(const TriangleMesh& mesh, int size) {
         for (int i = i0; i <= i1; ++i)
             for (int j = j0; j <= j1; ++j) {
                 const Point q{j + 0.5, i + 0.5};
-                const double wa = edge_function(b, c, q), wb = edge_function(c, a, q), wc = edge_function(a, b, q);
+                const double wa = edge_function(b, c, q), wb = edge_function(c, a, q),
+                             wc = edge_function(a, b, q);
                 if (wa < 0.0 || wb < 0.0 || wc < 0.0) continue;
                 if ((wa == 0.0 && !own_bc) || (wb == 0.0 && !own_ca) || (wc == 0.0 && !own_ab)) continue;
                 const std::size_t index = std::size_t(i) * std::size_t(size) + std::size_t(j);

@@ -1,3 +1,4 @@
+#include <gtest/gtest.h>
 #include <tdf/atlas/chart_packing.h>
 #include <tdf/atlas/uv_atlas.h>
 #include <tdf/atlas/uv_metrics.h>
@@ -5,12 +6,10 @@
 #include <tdf/core/parallel.h>
 #include <tdf/mesh/mesh_io.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <filesystem>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 
@@ -20,7 +19,8 @@ namespace {
 TriangleMesh plane(int n, int m, float w, float h) {
     TriangleMesh mesh;
     for (int j = 0; j <= m; ++j)
-        for (int i = 0; i <= n; ++i) mesh.positions.emplace_back(w * float(i) / float(n), h * float(j) / float(m), 0.0f);
+        for (int i = 0; i <= n; ++i)
+            mesh.positions.emplace_back(w * float(i) / float(n), h * float(j) / float(m), 0.0f);
     for (int j = 0; j < m; ++j)
         for (int i = 0; i < n; ++i) {
             const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
@@ -33,8 +33,10 @@ TriangleMesh plane(int n, int m, float w, float h) {
 // A unit cube with shared corner vertices, outward-facing triangles.
 TriangleMesh cube() {
     TriangleMesh mesh;
-    for (int i = 0; i < 8; ++i) mesh.positions.emplace_back(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1));
-    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (int i = 0; i < 8; ++i)
+        mesh.positions.emplace_back(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1));
+    const int quads[6][4] = {
+        {0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     for (const auto& q : quads) {
         mesh.triangles.push_back({q[0], q[1], q[2]});
         mesh.triangles.push_back({q[0], q[2], q[3]});
@@ -48,11 +50,13 @@ TriangleMesh torus(int n, int m, float r) {
     for (int j = 0; j < m; ++j)
         for (int i = 0; i < n; ++i) {
             const float u = 2 * kPi * float(i) / float(n), v = 2 * kPi * float(j) / float(m);
-            mesh.positions.emplace_back((1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u), r * std::sin(v));
+            mesh.positions.emplace_back(
+                (1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u), r * std::sin(v));
         }
     for (int j = 0; j < m; ++j)
         for (int i = 0; i < n; ++i) {
-            const int a = j * n + i, b = j * n + (i + 1) % n, c = ((j + 1) % m) * n + (i + 1) % n, d = ((j + 1) % m) * n + i;
+            const int a = j * n + i, b = j * n + (i + 1) % n, c = ((j + 1) % m) * n + (i + 1) % n,
+                      d = ((j + 1) % m) * n + i;
             mesh.triangles.push_back({a, b, c});
             mesh.triangles.push_back({a, c, d});
         }
@@ -78,8 +82,10 @@ void expect_isometric(const TriangleMesh& mesh, double tolerance) {
     double lo = 1e300, hi = 0;
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
         for (int k = 0; k < 3; ++k) {
-            const Vec3f d3 = mesh.positions[std::size_t(mesh.triangles[f][(k + 1) % 3])] - mesh.positions[std::size_t(mesh.triangles[f][k])];
-            const Vec2f d2 = mesh.uvs[std::size_t(mesh.uv_triangles[f][(k + 1) % 3])] - mesh.uvs[std::size_t(mesh.uv_triangles[f][k])];
+            const Vec3f d3 = mesh.positions[std::size_t(mesh.triangles[f][(k + 1) % 3])] -
+                             mesh.positions[std::size_t(mesh.triangles[f][k])];
+            const Vec2f d2 = mesh.uvs[std::size_t(mesh.uv_triangles[f][(k + 1) % 3])] -
+                             mesh.uvs[std::size_t(mesh.uv_triangles[f][k])];
             const double ratio = std::hypot(d2.x, d2.y) / double(length(d3));
             lo = std::min(lo, ratio);
             hi = std::max(hi, ratio);
@@ -168,7 +174,9 @@ TEST(UvAtlas, KeepsExistingUvsUnlessAskedAndRejectsBadOptions) {
     EXPECT_FLOAT_EQ(kept.uvs[4].x, 0.25f);
     EXPECT_NEAR(report.utilisation, 0.25, 0.01);
 
-    for (const auto& bad : {AtlasOptions{8}, AtlasOptions{1024, -1}, AtlasOptions{1024, 4, true, 70.0f, 95.0f},
+    for (const auto& bad : {AtlasOptions{8},
+                            AtlasOptions{1024, -1},
+                            AtlasOptions{1024, 4, true, 70.0f, 95.0f},
                             AtlasOptions{1024, 4, true, 70.0f, 70.0f, 0.5f}})
         EXPECT_THROW(build_atlas(mesh, bad), Error);
 }
@@ -224,8 +232,10 @@ TEST(UvAtlas, PackerKeepsGutterBetweenCharts) {
     for (std::size_t i = 0; i < boxes.size(); ++i)
         for (std::size_t j = i + 1; j < boxes.size(); ++j) {
             // Texels touched: [floor(min), ceil(max)); the gap between touched texel ranges >= gutter.
-            const float gap_x = std::max(std::floor(boxes[j][0]) - std::ceil(boxes[i][2]), std::floor(boxes[i][0]) - std::ceil(boxes[j][2]));
-            const float gap_y = std::max(std::floor(boxes[j][1]) - std::ceil(boxes[i][3]), std::floor(boxes[i][1]) - std::ceil(boxes[j][3]));
+            const float gap_x = std::max(std::floor(boxes[j][0]) - std::ceil(boxes[i][2]),
+                                         std::floor(boxes[i][0]) - std::ceil(boxes[j][2]));
+            const float gap_y = std::max(std::floor(boxes[j][1]) - std::ceil(boxes[i][3]),
+                                         std::floor(boxes[i][1]) - std::ceil(boxes[j][3]));
             EXPECT_GE(std::max(gap_x, gap_y), float(gutter)) << i << " vs " << j;
         }
 }
@@ -233,7 +243,8 @@ TEST(UvAtlas, PackerKeepsGutterBetweenCharts) {
 TEST(UvAtlas, SharedMeshesReunwrapWithoutOverlapsAndBeatXatlasUtilisation) {
     TDF_REQUIRE_SHARED_DATA("meshes");
     std::size_t tested = 0;
-    for (const auto& entry : std::filesystem::recursive_directory_iterator(test::shared_data_dir() + "/meshes")) {
+    for (const auto& entry :
+         std::filesystem::recursive_directory_iterator(test::shared_data_dir() + "/meshes")) {
         const std::string ext = entry.path().extension().string();
         if (ext != ".obj" && ext != ".gltf" && ext != ".glb" && ext != ".ply") continue;
         TriangleMesh mesh;

@@ -1,8 +1,7 @@
+#include <gtest/gtest.h>
 #include <tdf/atlas/gutter.h>
 #include <tdf/atlas/uv_raster.h>
 #include <tdf/core/error.h>
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 
@@ -37,7 +36,8 @@ TEST(UvRaster, FullQuadCoversEveryTexelOnceWithExactBarycentrics) {
             EXPECT_NEAR(w.x + w.y + w.z, 1.0f, 1e-6f);
             // Interpolated position = UV = texel centre, with row 0 at the top (v near 1).
             Vec3f p{0, 0, 0};
-            for (int k = 0; k < 3; ++k) p += mesh.positions[std::size_t(mesh.triangles[std::size_t(f)][k])] * w[k];
+            for (int k = 0; k < 3; ++k)
+                p += mesh.positions[std::size_t(mesh.triangles[std::size_t(f)][k])] * w[k];
             EXPECT_NEAR(p.x, (j + 0.5f) / size, 1e-5f);
             EXPECT_NEAR(p.y, 1.0f - (i + 0.5f) / size, 1e-5f);
         }

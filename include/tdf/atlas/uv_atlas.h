@@ -36,12 +36,12 @@ enum class ChartFlattening {
 };
 
 struct AtlasOptions {
-    int size = 1024;                 ///< atlas side in texels, [16, 16384]
-    int gutter = 4;                  ///< minimum empty texels between charts, [0, 64]
-    bool reunwrap = false;           ///< replace existing UVs (a mesh without UVs is always unwrapped)
-    float sharp_angle = 70.0f;       ///< degrees: dihedral angles above this always cut, (0, 180]
-    float cone_angle = 70.0f;        ///< degrees: largest face-normal deviation from a chart's mean, (0, 90)
-    float max_stretch = 1.02f;       ///< per-chart L2 stretch bound (1 = isometric), >= 1
+    int size = 1024;            ///< atlas side in texels, [16, 16384]
+    int gutter = 4;             ///< minimum empty texels between charts, [0, 64]
+    bool reunwrap = false;      ///< replace existing UVs (a mesh without UVs is always unwrapped)
+    float sharp_angle = 70.0f;  ///< degrees: dihedral angles above this always cut, (0, 180]
+    float cone_angle = 70.0f;   ///< degrees: largest face-normal deviation from a chart's mean, (0, 90)
+    float max_stretch = 1.02f;  ///< per-chart L2 stretch bound (1 = isometric), >= 1
     /// LSCM by default: with the tight stretch bound it gives lower stretch and better packing
     /// than ARAP on the shared meshes (smaller charts pack tighter), and is 2-4x faster.
     ChartFlattening flattening = ChartFlattening::Lscm;
@@ -49,22 +49,22 @@ struct AtlasOptions {
 
 /// Quality of a UV layout (measure_atlas), plus what build_atlas did.
 struct AtlasReport {
-    int size = 0;                        ///< atlas side used for utilisation
+    int size = 0;  ///< atlas side used for utilisation
     std::size_t faces = 0;
-    std::size_t chart_count = 0;         ///< connected components of the UV layout
-    double utilisation = 0;              ///< fraction of texel centres covered by a triangle, [0, 1]
-    double stretch_mean = 0;             ///< Sander et al. 2001 L2 stretch over the mesh (1 = isometric)
-    double stretch_max = 0;              ///< largest per-triangle L2 stretch (same normalization)
-    double angle_distortion_mean = 0;    ///< degrees, mean |UV angle - 3-D angle| over corners
-    double angle_distortion_max = 0;     ///< degrees
-    std::size_t overlaps = 0;            ///< pairs of UV triangles whose interiors overlap
-    std::size_t mirrored_charts = 0;     ///< charts with negative total UV area (wound clockwise)
-    std::size_t flipped_triangles = 0;   ///< non-degenerate faces with negative UV area
-    std::size_t unmapped_faces = 0;      ///< faces with non-finite UVs, UVs outside [0,1], or zero UV area
-                                         ///< while having 3-D area
-    std::size_t degenerate_faces = 0;    ///< zero-area faces (mapped, left out of the distortion)
-    bool reunwrapped = false;            ///< false when the mesh's own UVs were kept
-    double seconds = 0;                  ///< wall time of build_atlas (0 for measure_atlas alone)
+    std::size_t chart_count = 0;        ///< connected components of the UV layout
+    double utilisation = 0;             ///< fraction of texel centres covered by a triangle, [0, 1]
+    double stretch_mean = 0;            ///< Sander et al. 2001 L2 stretch over the mesh (1 = isometric)
+    double stretch_max = 0;             ///< largest per-triangle L2 stretch (same normalization)
+    double angle_distortion_mean = 0;   ///< degrees, mean |UV angle - 3-D angle| over corners
+    double angle_distortion_max = 0;    ///< degrees
+    std::size_t overlaps = 0;           ///< pairs of UV triangles whose interiors overlap
+    std::size_t mirrored_charts = 0;    ///< charts with negative total UV area (wound clockwise)
+    std::size_t flipped_triangles = 0;  ///< non-degenerate faces with negative UV area
+    std::size_t unmapped_faces = 0;     ///< faces with non-finite UVs, UVs outside [0,1], or zero UV area
+                                        ///< while having 3-D area
+    std::size_t degenerate_faces = 0;   ///< zero-area faces (mapped, left out of the distortion)
+    bool reunwrapped = false;           ///< false when the mesh's own UVs were kept
+    double seconds = 0;                 ///< wall time of build_atlas (0 for measure_atlas alone)
 };
 
 /// Builds (or keeps) the UV atlas of `mesh`: returns a copy whose `uvs`/`uv_triangles` come from
@@ -73,7 +73,8 @@ struct AtlasReport {
 /// result, plus timing) when given. Throws tdf::Error for options out of range or a mesh without
 /// faces; never fails on bad geometry (degenerate, non-manifold, duplicated faces).
 /// Deterministic: the same input gives the same atlas on any thread count.
-TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, AtlasReport* report = nullptr);
+TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options,
+                         AtlasReport* report = nullptr);
 
 /// Measures any UV layout (see AtlasReport); `size` is the texture side for utilisation.
 /// Throws tdf::Error when the mesh has no UVs.
