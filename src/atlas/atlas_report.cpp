@@ -47,6 +47,7 @@ AtlasReport measure_atlas(const TriangleMesh& mesh, int size) {
 
     double sum_stretch = 0, sum_area3 = 0, sum_area_uv = 0, max_stretch_squared = 0, angle_sum = 0;
     std::size_t measured = 0;
+    std::vector<double> collapsed_areas;
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
         const Vec3i& t = mesh.triangles[f];
         const Vec3i& ti = mesh.uv_triangles[f];
@@ -62,7 +63,7 @@ AtlasReport measure_atlas(const TriangleMesh& mesh, int size) {
         bool inside = std::isfinite(area2);
         for (const Vec2f uv : p)
             inside = inside && uv.x >= -1e-6f && uv.x <= 1 + 1e-6f && uv.y >= -1e-6f && uv.y <= 1 + 1e-6f;
-        if (!inside || (!degenerate && area2 == 0.0)) {
+        if (!inside) {
             ++r.unmapped_faces;
             continue;
         }
@@ -70,6 +71,10 @@ AtlasReport measure_atlas(const TriangleMesh& mesh, int size) {
         chart_area[std::size_t(root)] += area2;
         used[std::size_t(root)] = 1;
         if (degenerate) continue;
+        if (area2 == 0.0) {  // judged below, once the layout's texel density is known
+            collapsed_areas.push_back(area3);
+            continue;
+        }
         r.flipped_triangles += area2 < 0;
         const double stretch = l2_stretch_squared(q, p);
         sum_stretch += stretch * area3;
@@ -86,6 +91,11 @@ AtlasReport measure_atlas(const TriangleMesh& mesh, int size) {
             ++r.chart_count;
             r.mirrored_charts += chart_area[v] < 0;
         }
+    // A face with area but none in UV is unmapped unless it is far below a texel at the
+    // layout's density (a needle whose UVs rounded together): it still sits on its chart.
+    const double texels_per_area =
+        sum_area3 > 0 ? sum_area_uv / sum_area3 * double(size) * double(size) : 0.0;
+    for (const double area3 : collapsed_areas) r.unmapped_faces += area3 * texels_per_area >= 1e-3;
     if (sum_area3 > 0) {
         // Normalize so that a uniformly scaled isometry measures exactly 1 (Sander et al. 2001).
         const double normalization = std::sqrt(sum_area_uv / sum_area3);

@@ -89,8 +89,7 @@ Surface analyse_surface(const TriangleMesh& mesh) {
         s.area[f] = 0.5 * std::sqrt(dot(n, n));
         s.normal[f] = normalized(n);
         s.centroid[f] = (a + b + c) * (1.0 / 3.0);
-        const int w0 = s.vertex(int(f), 0), w1 = s.vertex(int(f), 1), w2 = s.vertex(int(f), 2);
-        s.degenerate[f] = !(s.area[f] > min_area) || w0 == w1 || w1 == w2 || w0 == w2;
+        s.degenerate[f] = !(s.area[f] > min_area);
     }
 
     // Edges: sort (undirected key, face, slot) and link exactly-two-face, opposite-direction pairs.
@@ -105,6 +104,7 @@ Surface analyse_surface(const TriangleMesh& mesh) {
         if (s.degenerate[f]) continue;
         for (int k = 0; k < 3; ++k) {
             const int a = s.vertex(int(f), k), b = s.vertex(int(f), (k + 1) % 3);
+            if (a == b) continue;  // corners welded together: no edge to cross
             const auto lo = std::uint64_t(std::min(a, b)), hi = std::uint64_t(std::max(a, b));
             edges.push_back({(lo << 32) | hi, int(f), k, a < b});
         }
@@ -361,10 +361,19 @@ FlattenOutcome flatten(const Surface& s, const std::vector<int>& faces, const At
         }
 
     if (n == 1) {  // a lone triangle: lay it out exactly
-        const Vec3f a = local_positions[0], b = local_positions[1], c = local_positions[2];
+        // Along its longest edge, so a needle with two nearly coincident corners stays exact.
+        int k = 0;
+        for (int e = 1; e < 3; ++e)
+            if (length(local_positions[std::size_t((e + 1) % 3)] - local_positions[std::size_t(e)]) >
+                length(local_positions[std::size_t((k + 1) % 3)] - local_positions[std::size_t(k)]))
+                k = e;
+        const std::size_t i0 = std::size_t(k), i1 = std::size_t((k + 1) % 3), i2 = std::size_t((k + 2) % 3);
+        const Vec3f a = local_positions[i0], b = local_positions[i1], c = local_positions[i2];
         const float ab = length(b - a);
         const Vec3f x_axis = (b - a) / ab;
-        chart.uvs = {{0, 0}, {ab, 0}, {dot(c - a, x_axis), float(2.0 * s.area[std::size_t(faces[0])] / ab)}};
+        chart.uvs.assign(3, Vec2f{});
+        chart.uvs[i1] = {ab, 0};
+        chart.uvs[i2] = {dot(c - a, x_axis), float(2.0 * s.area[std::size_t(faces[0])] / ab)};
         out.ok = true;
         return out;
     }

@@ -148,6 +148,9 @@ TEST(UvAtlas, SurvivesDegenerateDuplicateAndNonManifoldInput) {
     mesh.triangles.push_back({0, 1, n + 2});
     mesh.positions.emplace_back(5.0f, 5.0f, 5.0f);
     mesh.triangles.push_back({n + 3, n + 3, n + 3});
+    // A needle: two corners closer than the weld distance, yet a non-zero area.
+    mesh.positions.push_back(mesh.positions[0] + Vec3f{1e-8f, 0.0f, 0.0f});
+    mesh.triangles.push_back({0, n + 4, n + 1});
     // A duplicated face with the opposite winding (a two-sided sheet).
     mesh.triangles.push_back({mesh.triangles[0].x, mesh.triangles[0].z, mesh.triangles[0].y});
     AtlasReport report;

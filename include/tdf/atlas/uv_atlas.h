@@ -60,11 +60,12 @@ struct AtlasReport {
     std::size_t overlaps = 0;           ///< pairs of UV triangles whose interiors overlap
     std::size_t mirrored_charts = 0;    ///< charts with negative total UV area (wound clockwise)
     std::size_t flipped_triangles = 0;  ///< non-degenerate faces with negative UV area
-    std::size_t unmapped_faces = 0;     ///< faces with non-finite UVs, UVs outside [0,1], or zero UV area
-                                        ///< while having 3-D area
-    std::size_t degenerate_faces = 0;   ///< zero-area faces (mapped, left out of the distortion)
-    bool reunwrapped = false;           ///< false when the mesh's own UVs were kept
-    double seconds = 0;                 ///< wall time of build_atlas (0 for measure_atlas alone)
+    /// Faces with non-finite UVs or UVs outside [0,1], or with no UV area although their 3-D
+    /// area would cover 1e-3 texel or more at the layout's mean density.
+    std::size_t unmapped_faces = 0;
+    std::size_t degenerate_faces = 0;  ///< zero-area faces (mapped, left out of the distortion)
+    bool reunwrapped = false;          ///< false when the mesh's own UVs were kept
+    double seconds = 0;                ///< wall time of build_atlas (0 for measure_atlas alone)
 };
 
 /// Builds (or keeps) the UV atlas of `mesh`: returns a copy whose `uvs`/`uv_triangles` come from
