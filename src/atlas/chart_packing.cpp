@@ -1,3 +1,5 @@
+// Shape-based chart packing (see chart_packing.h): conservative chart masks placed in a texel
+// bitmap, with a bisection on the scale.
 #include <tdf/atlas/chart_packing.h>
 #include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
@@ -15,6 +17,19 @@ namespace {
 
 struct P2 {
     double x, y;
+};
+
+P2 rotated(P2 p, double c, double s) { return {c * p.x - s * p.y, s * p.x + c * p.y}; }
+
+struct Box {
+    double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
+    void add(P2 p) {
+        lo_x = std::min(lo_x, p.x);
+        lo_y = std::min(lo_y, p.y);
+        hi_x = std::max(hi_x, p.x);
+        hi_y = std::max(hi_y, p.y);
+    }
+    double area() const { return (hi_x - lo_x) * (hi_y - lo_y); }
 };
 
 // A chart turned to its minimal-area bounding rectangle, with its lower-left corner at 0.
@@ -37,31 +52,28 @@ PreparedChart prepare(const PackChart& chart) {
         const P2 a = hull[i], b = hull[(i + 1) % hull.size()];
         const double angle = std::atan2(b.y - a.y, b.x - a.x);
         const double c = std::cos(-angle), s = std::sin(-angle);
-        double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
-        for (const P2 p : hull) {
-            const double x = c * p.x - s * p.y, y = s * p.x + c * p.y;
-            lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x), lo_y = std::min(lo_y, y),
-            hi_y = std::max(hi_y, y);
+        Box box;
+        for (const P2 p : hull) box.add(rotated(p, c, s));
+        if (box.area() < best_area * (1 - 1e-9)) {
+            best_area = box.area();
+            best_angle = angle;
         }
-        const double area = (hi_x - lo_x) * (hi_y - lo_y);
-        if (area < best_area * (1 - 1e-9)) best_area = area, best_angle = angle;
     }
-    const double c = std::cos(-best_angle), s = std::sin(-best_angle);
-    double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
+    const double cos_a = std::cos(-best_angle), sin_a = std::sin(-best_angle);
+    Box box;
     for (P2& p : points) {
-        p = {c * p.x - s * p.y, s * p.x + c * p.y};
-        lo_x = std::min(lo_x, p.x), hi_x = std::max(hi_x, p.x), lo_y = std::min(lo_y, p.y),
-        hi_y = std::max(hi_y, p.y);
+        p = rotated(p, cos_a, sin_a);
+        box.add(p);
     }
-    for (P2& p : points) p = {p.x - lo_x, p.y - lo_y};
+    for (P2& p : points) p = {p.x - box.lo_x, p.y - box.lo_y};
     out.points = std::move(points);
-    out.width = std::max(hi_x - lo_x, 0.0);
-    out.height = std::max(hi_y - lo_y, 0.0);
-    for (const Vec3i& t : out.triangles)
-        out.area +=
-            std::abs(signed_uv_area2(
-                chart.uvs[std::size_t(t.x)], chart.uvs[std::size_t(t.y)], chart.uvs[std::size_t(t.z)])) *
-            0.5;
+    out.width = std::max(box.hi_x - box.lo_x, 0.0);
+    out.height = std::max(box.hi_y - box.lo_y, 0.0);
+    for (const Vec3i& t : out.triangles) {
+        const Vec2f a = chart.uvs[std::size_t(t.x)], b = chart.uvs[std::size_t(t.y)],
+                    c = chart.uvs[std::size_t(t.z)];
+        out.area += 0.5 * std::abs(signed_uv_area2(a, b, c));
+    }
     return out;
 }
 
