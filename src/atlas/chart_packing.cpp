@@ -83,8 +83,9 @@ struct Mask {
     std::vector<std::uint8_t> cells;  // row-major, y * w + x
 };
 
-// True when the closed triangle (a, b, c) touches the open cell square [x, x+1] x [y, y+1]
-// (separating axes: the cell's axes are covered by the caller's bounding box loop).
+// True when the triangle touches the cell square [x, x+1] x [y, y+1], boundaries included, which
+// keeps masks conservative (separating axes: the cell's own axes are covered by the caller's
+// bounding-box loop, the triangle's edge normals are tested here).
 bool triangle_touches_cell(const P2 (&t)[3], int x, int y) {
     const P2 corners[4] = {
         {double(x), double(y)}, {x + 1.0, double(y)}, {double(x), y + 1.0}, {x + 1.0, y + 1.0}};
@@ -95,11 +96,13 @@ bool triangle_touches_cell(const P2 (&t)[3], int x, int y) {
         double tri_lo = 1e300, tri_hi = -1e300, cell_lo = 1e300, cell_hi = -1e300;
         for (const P2 p : t) {
             const double d = p.x * nx + p.y * ny;
-            tri_lo = std::min(tri_lo, d), tri_hi = std::max(tri_hi, d);
+            tri_lo = std::min(tri_lo, d);
+            tri_hi = std::max(tri_hi, d);
         }
         for (const P2 p : corners) {
             const double d = p.x * nx + p.y * ny;
-            cell_lo = std::min(cell_lo, d), cell_hi = std::max(cell_hi, d);
+            cell_lo = std::min(cell_lo, d);
+            cell_hi = std::max(cell_hi, d);
         }
         if (tri_hi < cell_lo || cell_hi < tri_lo) return false;
     }

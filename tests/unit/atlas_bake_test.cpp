@@ -47,6 +47,16 @@ Comparison compare_at_random_points(const TriangleMesh& mesh, int count,
     return c;
 }
 
+// The barycentric interpolation of the vertex colours at (face f, weights b): the reference.
+void vertex_colour_at(const TriangleMesh& mesh, std::size_t f, Vec3f b, float* out) {
+    const Vec3i& t = mesh.triangles[f];
+    const Vec3f v = mesh.colors[std::size_t(t.x)] * b.x + mesh.colors[std::size_t(t.y)] * b.y +
+                    mesh.colors[std::size_t(t.z)] * b.z;
+    out[0] = v.x;
+    out[1] = v.y;
+    out[2] = v.z;
+}
+
 Vec2f uv_at(const TriangleMesh& mesh, std::size_t f, Vec3f b) {
     const Vec3i& t = mesh.uv_triangles[f];
     return mesh.uvs[std::size_t(t.x)] * b.x + mesh.uvs[std::size_t(t.y)] * b.y +
@@ -83,12 +93,7 @@ TEST(Bake, LinearVertexColoursOnAPlaneBakeExactly) {
     const Comparison c = compare_at_random_points(
         atlas,
         2000,
-        [&](std::size_t f, Vec3f b, float* out) {
-            const Vec3i& t = atlas.triangles[f];
-            const Vec3f v = atlas.colors[std::size_t(t.x)] * b.x + atlas.colors[std::size_t(t.y)] * b.y +
-                            atlas.colors[std::size_t(t.z)] * b.z;
-            out[0] = v.x, out[1] = v.y, out[2] = v.z;
-        },
+        [&](std::size_t f, Vec3f b, float* out) { vertex_colour_at(atlas, f, b, out); },
         [&](std::size_t f, Vec3f b, float* out) { sample_bilinear(baked, uv_at(atlas, f, b), out); });
     std::printf("plane bake: PSNR %.1f dB, max error %.2g\n", c.psnr, c.max_error);
     // Bilinear reconstruction of a linear function is exact inside the chart; only lookups
@@ -108,12 +113,7 @@ TEST(Bake, VertexColourBakeMatchesBarycentricInterpolationOnSpot) {
     const Comparison c = compare_at_random_points(
         atlas,
         20000,
-        [&](std::size_t f, Vec3f b, float* out) {
-            const Vec3i& t = mesh.triangles[f];
-            const Vec3f v = mesh.colors[std::size_t(t.x)] * b.x + mesh.colors[std::size_t(t.y)] * b.y +
-                            mesh.colors[std::size_t(t.z)] * b.z;
-            out[0] = v.x, out[1] = v.y, out[2] = v.z;
-        },
+        [&](std::size_t f, Vec3f b, float* out) { vertex_colour_at(mesh, f, b, out); },
         [&](std::size_t f, Vec3f b, float* out) { sample_bilinear(baked, uv_at(atlas, f, b), out); });
     std::printf("spot vertex-colour bake vs direct interpolation: PSNR %.1f dB, max error %.3f\n",
                 c.psnr,

@@ -223,8 +223,10 @@ TEST(UvAtlas, PackerKeepsGutterBetweenCharts) {
     for (const PackChart& c : charts) {
         std::array<float, 4> b = {1e9f, 1e9f, -1e9f, -1e9f};
         for (const Vec2f uv : c.uvs) {
-            b[0] = std::min(b[0], uv.x * size), b[1] = std::min(b[1], uv.y * size);
-            b[2] = std::max(b[2], uv.x * size), b[3] = std::max(b[3], uv.y * size);
+            b[0] = std::min(b[0], uv.x * size);
+            b[1] = std::min(b[1], uv.y * size);
+            b[2] = std::max(b[2], uv.x * size);
+            b[3] = std::max(b[3], uv.y * size);
             EXPECT_GE(uv.x, 0.0f);
             EXPECT_LE(uv.y, 1.0f);
         }
