@@ -10,7 +10,6 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <map>
 
 #include "commands.h"
 
@@ -23,6 +22,7 @@ struct AtlasCommandOptions {
     std::string output;
     std::string report_path;
     std::string texture;
+    std::string flattening = "lscm";
     bool bake_albedo = false;
     AtlasOptions atlas;
 };
@@ -31,13 +31,15 @@ int run_atlas(const AtlasCommandOptions& o) {
     namespace fs = std::filesystem;
     const std::string ext = lower_extension(o.output);
     if (ext != ".obj" && ext != ".glb") throw_error("-o {}: the output must be .obj or .glb", o.output);
+    AtlasOptions atlas_options = o.atlas;
+    atlas_options.flattening = o.flattening == "arap" ? ChartFlattening::Arap : ChartFlattening::Lscm;
     TriangleMesh mesh = load_mesh(o.input);
     if (!o.texture.empty()) {
         mesh.albedo = read_image(o.texture);
         mesh.albedo_path = o.texture;
     }
     AtlasReport report;
-    const TriangleMesh atlas = build_atlas(mesh, o.atlas, &report);
+    const TriangleMesh atlas = build_atlas(mesh, atlas_options, &report);
 
     Image albedo;
     if (o.bake_albedo) {
@@ -121,14 +123,12 @@ Command register_atlas(CLI::App& root) {
                     options->atlas.max_stretch,
                     "per-chart L2 stretch bound; charts above it are split")
         ->capture_default_str();
-    const std::map<std::string, ChartFlattening> methods = {{"lscm", ChartFlattening::Lscm},
-                                                            {"arap", ChartFlattening::Arap}};
     app->add_option(
            "--flattening",
-           options->atlas.flattening,
+           options->flattening,
            "chart flattening: lscm (conformal), or arap (LSCM, then ARAP for charts over the stretch bound)")
-        ->transform(CLI::CheckedTransformer(methods, CLI::ignore_case))
-        ->default_str("lscm");
+        ->check(CLI::IsMember({"lscm", "arap"}))
+        ->capture_default_str();
     command.app = app;
     command.run = [options] { return run_atlas(*options); };
     return command;
