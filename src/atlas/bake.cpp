@@ -7,7 +7,8 @@ namespace tdf {
 
 Image bake_vertex_colors(const TriangleMesh& mesh, int size) {
     if (!mesh.has_colors()) throw_error("{}: the mesh has no vertex colours to bake", mesh.source_path);
-    const UvRaster raster = rasterize_uv(mesh, size);
+    UvRaster raster = rasterize_uv(mesh, size);
+    add_partial_texels(mesh, raster);
     Image image = interpolate_vertex_attribute(mesh, raster, mesh.colors);
     dilate_gutter(image, raster.triangle, 0);
     return image;
@@ -27,7 +28,8 @@ Image rebake_texture(const TriangleMesh& source, const Image& texture, const Tri
             if (source.triangles[f][k] != target.triangles[f][k])
                 throw_error(
                     "{}: cannot re-bake: face {} differs between the meshes", source.source_path, f + 1);
-    const UvRaster raster = rasterize_uv(target, size);
+    UvRaster raster = rasterize_uv(target, size);
+    add_partial_texels(target, raster);
     Image image(size, size, texture.channels());
     parallel_for(raster.texel_count(), 4096, [&](std::size_t begin, std::size_t end) {
         for (std::size_t t = begin; t < end; ++t) {

@@ -83,32 +83,6 @@ struct Mask {
     std::vector<std::uint8_t> cells;  // row-major, y * w + x
 };
 
-// True when the triangle touches the cell square [x, x+1] x [y, y+1], boundaries included, which
-// keeps masks conservative (separating axes: the cell's own axes are covered by the caller's
-// bounding-box loop, the triangle's edge normals are tested here).
-bool triangle_touches_cell(const P2 (&t)[3], int x, int y) {
-    const P2 corners[4] = {
-        {double(x), double(y)}, {x + 1.0, double(y)}, {double(x), y + 1.0}, {x + 1.0, y + 1.0}};
-    for (int k = 0; k < 3; ++k) {
-        const P2 a = t[k], b = t[(k + 1) % 3];
-        const double nx = a.y - b.y, ny = b.x - a.x;  // any normal of edge ab
-        if (nx == 0.0 && ny == 0.0) continue;
-        double tri_lo = 1e300, tri_hi = -1e300, cell_lo = 1e300, cell_hi = -1e300;
-        for (const P2 p : t) {
-            const double d = p.x * nx + p.y * ny;
-            tri_lo = std::min(tri_lo, d);
-            tri_hi = std::max(tri_hi, d);
-        }
-        for (const P2 p : corners) {
-            const double d = p.x * nx + p.y * ny;
-            cell_lo = std::min(cell_lo, d);
-            cell_hi = std::max(cell_hi, d);
-        }
-        if (tri_hi < cell_lo || cell_hi < tri_lo) return false;
-    }
-    return true;
-}
-
 // Rasterizes the chart at `scale` texels per unit, offset by `margin` texels, then dilates by
 // `margin` (square), so that two masks that do not overlap keep 2 * margin texels apart.
 Mask rasterize_chart(const PreparedChart& chart, double scale, int margin) {
@@ -118,16 +92,21 @@ Mask rasterize_chart(const PreparedChart& chart, double scale, int margin) {
     mask.cells.assign(std::size_t(mask.w) * std::size_t(mask.h), 0);
     const auto texel = [&](P2 p) { return P2{p.x * scale + margin, p.y * scale + margin}; };
     for (const Vec3i& tri : chart.triangles) {
-        const P2 t[3] = {texel(chart.points[std::size_t(tri.x)]),
-                         texel(chart.points[std::size_t(tri.y)]),
-                         texel(chart.points[std::size_t(tri.z)])};
-        const int x0 = std::clamp(int(std::floor(std::min({t[0].x, t[1].x, t[2].x}))), 0, mask.w - 1);
-        const int x1 = std::clamp(int(std::floor(std::max({t[0].x, t[1].x, t[2].x}))), 0, mask.w - 1);
-        const int y0 = std::clamp(int(std::floor(std::min({t[0].y, t[1].y, t[2].y}))), 0, mask.h - 1);
-        const int y1 = std::clamp(int(std::floor(std::max({t[0].y, t[1].y, t[2].y}))), 0, mask.h - 1);
+        double xs[3], ys[3];
+        for (int k = 0; k < 3; ++k) {
+            const P2 p = texel(chart.points[std::size_t(tri[k])]);
+            xs[k] = p.x;
+            ys[k] = p.y;
+        }
+        const int x0 = std::clamp(int(std::floor(std::min({xs[0], xs[1], xs[2]}))), 0, mask.w - 1);
+        const int x1 = std::clamp(int(std::floor(std::max({xs[0], xs[1], xs[2]}))), 0, mask.w - 1);
+        const int y0 = std::clamp(int(std::floor(std::min({ys[0], ys[1], ys[2]}))), 0, mask.h - 1);
+        const int y1 = std::clamp(int(std::floor(std::max({ys[0], ys[1], ys[2]}))), 0, mask.h - 1);
+        // Every texel the triangle touches, boundaries included: the mask is conservative.
         for (int y = y0; y <= y1; ++y)
             for (int x = x0; x <= x1; ++x)
-                if (!mask.cells[std::size_t(y * mask.w + x)] && triangle_touches_cell(t, x, y))
+                if (!mask.cells[std::size_t(y * mask.w + x)] &&
+                    triangle_touches_box(xs, ys, x, y, x + 1, y + 1))
                     mask.cells[std::size_t(y * mask.w + x)] = 1;
     }
     if (margin > 0) {  // separable square dilation

@@ -61,6 +61,32 @@ AngleDistortion angle_distortion(const std::array<Vec3f, 3>& q, const std::array
     return result;
 }
 
+bool triangle_touches_box(const double (&xs)[3], const double (&ys)[3], double x0, double y0, double x1,
+                          double y1) {
+    if (std::max({xs[0], xs[1], xs[2]}) < x0 || std::min({xs[0], xs[1], xs[2]}) > x1 ||
+        std::max({ys[0], ys[1], ys[2]}) < y0 || std::min({ys[0], ys[1], ys[2]}) > y1)
+        return false;
+    const double corner_x[4] = {x0, x1, x0, x1}, corner_y[4] = {y0, y0, y1, y1};
+    for (int k = 0; k < 3; ++k) {
+        const int k1 = (k + 1) % 3;
+        const double nx = ys[k] - ys[k1], ny = xs[k1] - xs[k];  // a normal of edge k
+        if (nx == 0.0 && ny == 0.0) continue;
+        double tri_lo = 1e300, tri_hi = -1e300, box_lo = 1e300, box_hi = -1e300;
+        for (int j = 0; j < 3; ++j) {
+            const double d = xs[j] * nx + ys[j] * ny;
+            tri_lo = std::min(tri_lo, d);
+            tri_hi = std::max(tri_hi, d);
+        }
+        for (int j = 0; j < 4; ++j) {
+            const double d = corner_x[j] * nx + corner_y[j] * ny;
+            box_lo = std::min(box_lo, d);
+            box_hi = std::max(box_hi, d);
+        }
+        if (tri_hi < box_lo || box_hi < tri_lo) return false;
+    }
+    return true;
+}
+
 std::vector<Vec2f> convex_hull(std::vector<Vec2f> points) {
     std::sort(points.begin(), points.end(), [](Vec2f a, Vec2f b) {
         return a.x < b.x || (a.x == b.x && a.y < b.y);

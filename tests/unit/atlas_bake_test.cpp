@@ -118,7 +118,7 @@ TEST(Bake, VertexColourBakeMatchesBarycentricInterpolationOnSpot) {
     std::printf("spot vertex-colour bake vs direct interpolation: PSNR %.1f dB, max error %.3f\n",
                 c.psnr,
                 c.max_error);
-    EXPECT_GT(c.psnr, 45.0);  // measured 53.3 dB
+    EXPECT_GT(c.psnr, 50.0);  // measured 56.6 dB
 }
 
 TEST(Bake, RebakedTextureMatchesTheOriginalAtTheSameSurfacePoints) {
@@ -144,7 +144,7 @@ TEST(Bake, RebakedTextureMatchesTheOriginalAtTheSameSurfacePoints) {
             std::copy(v, v + 3, out);
         });
     std::printf("spot texture re-bake vs original: PSNR %.1f dB, max error %.3f\n", c.psnr, c.max_error);
-    EXPECT_GT(c.psnr, 40.0);  // measured 47.5 dB
+    EXPECT_GT(c.psnr, 44.0);  // measured 48.9 dB
 }
 
 TEST(Bake, BadInputIsAnError) {

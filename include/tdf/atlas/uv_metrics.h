@@ -29,6 +29,11 @@ struct AngleDistortion {
 };
 AngleDistortion angle_distortion(const std::array<Vec3f, 3>& q, const std::array<Vec2f, 3>& p);
 
+/// True when the triangle (xs[k], ys[k]) and the axis-aligned box [x0, x1] x [y0, y1] touch,
+/// boundaries included (separating axes: the box's two and the triangle's three edge normals).
+bool triangle_touches_box(const double (&xs)[3], const double (&ys)[3], double x0, double y0, double x1,
+                          double y1);
+
 /// Convex hull of `points`, counter-clockwise (Andrew's monotone chain, in double precision);
 /// fewer than 3 points when they are all collinear or coincide.
 std::vector<Vec2f> convex_hull(std::vector<Vec2f> points);
