@@ -166,6 +166,8 @@ void smooth_chart_borders(const Surface& s, double cos_sharp, double cos_cone, s
 
 // Greedy chart growth: the candidate closest in normal to the chart's mean (then nearest the
 // seed) joins while it stays inside the normal cone; sharp edges are never crossed.
+constexpr double kDistanceWeight = 0.5;
+
 std::vector<std::vector<int>> grow_charts(const Surface& s, const AtlasOptions& options) {
     const std::size_t faces = s.normal.size();
     const double cos_sharp = std::cos(double(radians(options.sharp_angle)));
@@ -188,9 +190,12 @@ std::vector<std::vector<int>> grow_charts(const Surface& s, const AtlasOptions& 
                 const int g = s.neighbour[std::size_t(f)][k];
                 if (g < 0 || chart_of[std::size_t(g)] >= 0) continue;
                 if (dot(s.normal[std::size_t(f)], s.normal[std::size_t(g)]) < cos_sharp) continue;
+                // Normal deviation plus distance to the seed (over the diagonal, weighted
+                // kDistanceWeight): among faces of similar normal the nearest joins first, so flat
+                // regions grow as compact discs rather than in face order.
                 const D3 offset = s.centroid[std::size_t(g)] - s.centroid[seed];
                 const double cost = (1.0 - dot(s.normal[std::size_t(g)], mean)) +
-                                    0.5 * std::sqrt(dot(offset, offset)) / s.diagonal;
+                                    kDistanceWeight * std::sqrt(dot(offset, offset)) / s.diagonal;
                 queue.emplace(cost, g);
             }
         };
