@@ -196,6 +196,15 @@ TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
             words >> e.name >> count;
             if (e.name.empty() || count < 0)
                 throw_error("{}:{}: malformed element line '{}'", path, line_number, line);
+            // Every item takes at least one byte: a larger count is a corrupt header, not a
+            // reason to reserve gigabytes.
+            if (std::size_t(count) > data.size())
+                throw_error("{}:{}: element '{}' declares {} items but the file has only {} bytes",
+                            path,
+                            line_number,
+                            e.name,
+                            count,
+                            data.size());
             e.count = std::size_t(count);
             elements.push_back(e);
         } else if (keyword == "property") {

@@ -123,5 +123,8 @@ TEST(PlyIo, BadInputNamesFileAndProblem) {
                  "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                  "property float z\nend_header\n0 0 0\n",
                  "no face element");
+    expect_error("huge_count.ply",
+                 "ply\nformat binary_little_endian 1.0\nelement vertex 99999999999\nend_header\n",
+                 "declares 99999999999 items");
     expect_error("truncated_bin.ply", binary_quad(false).substr(0, 300), "truncated");
 }
