@@ -194,12 +194,20 @@ public:
         : m_size(size),
           m_run(std::size_t(size) * std::size_t(size)),
           m_used(m_run.size(), 0),
-          m_longest(std::size_t(size)) {
+          m_longest(std::size_t(size)),
+          m_first_row(std::size_t(size) + 1, 0) {
         for (int y = 0; y < size; ++y) update_row(y);
     }
     int run(int x, int y) const { return m_run[std::size_t(y) * std::size_t(m_size) + std::size_t(x)]; }
     /// The longest free run in row y: a quick test that rules out whole rows.
     int longest_run(int y) const { return m_longest[std::size_t(y)]; }
+    /// The lowest row holding a free run of at least `length` cells (`size` when none). Runs only
+    /// shrink as charts are placed, so this only moves up: the pointers advance lazily.
+    int first_row_with_run(int length) {
+        int& row = m_first_row[std::size_t(length)];
+        while (row < m_size && m_longest[std::size_t(row)] < length) ++row;
+        return row;
+    }
     void occupy(const std::vector<Span>& spans, int x, int y, int h) {
         for (const Span& s : spans)
             std::fill_n(m_used.begin() + std::ptrdiff_t(std::size_t(y + s.row) * std::size_t(m_size) +
@@ -224,13 +232,17 @@ private:
     std::vector<int> m_run;
     std::vector<std::uint8_t> m_used;
     std::vector<int> m_longest;
+    std::vector<int> m_first_row;  // per run length
 };
 
 // Lowest (then leftmost) position where the mask fits, scanning rows bottom-up with free-run
 // skips; false when it fits nowhere. Rows at or above `stop_y` are not scanned.
-bool lowest_fit(const FreeRuns& atlas, const Mask& m, const std::vector<Span>& spans, int size, int stop_y,
+bool lowest_fit(FreeRuns& atlas, const Mask& m, const std::vector<Span>& spans, int size, int stop_y,
                 int& fit_x, int& fit_y) {
-    for (int y = 0; y + m.h <= size && y < stop_y; ++y) {
+    // No position lies below the row at which every span first finds a long enough run.
+    int start = 0;
+    for (const Span& s : spans) start = std::max(start, atlas.first_row_with_run(s.length) - s.row);
+    for (int y = start; y + m.h <= size && y < stop_y; ++y) {
         bool possible = true;
         for (const Span& s : spans)
             if (atlas.longest_run(y + s.row) < s.length) {
@@ -305,6 +317,9 @@ bool try_pack(const std::vector<TurnedMasks>& charts, const std::vector<std::siz
 
 }  // namespace
 
+// The densest mask coverage the greedy packer is expected to reach; used to skip hopeless scales.
+constexpr double kMaxMaskFill = 0.92;
+
 double pack_charts(std::vector<PackChart>& charts, int size, int gutter) {
     if (charts.empty()) return 1.0;
     std::vector<PreparedChart> prepared(charts.size());
@@ -329,8 +344,16 @@ double pack_charts(std::vector<PackChart>& charts, int size, int gutter) {
     for (const PreparedChart& c : prepared) total_area += c.area;
     const int margin = (gutter + 1) / 2;
     std::vector<Placement> placements, best_placements;
-    const auto fits = [&](double scale) {
-        const std::vector<TurnedMasks> masks = rasterize_all(prepared, scale, margin);
+    // Masks never overlap, so their total area bounds what can fit: scales whose masks exceed
+    // the square are rejected without packing, and the search jumps below them.
+    const double texels = double(size) * double(size);
+    const auto mask_area = [](const std::vector<TurnedMasks>& masks) {
+        double area = 0;
+        for (const TurnedMasks& m : masks)
+            for (const Span& span : m.spans[0]) area += span.length;
+        return area;
+    };
+    const auto pack = [&](const std::vector<TurnedMasks>& masks) {
         for (const auto& order : orders)
             if (try_pack(masks, order, size, placements)) {
                 best_placements = placements;
@@ -342,12 +365,15 @@ double pack_charts(std::vector<PackChart>& charts, int size, int gutter) {
     // Shrink from 85 % utilisation in ~10 % area steps until everything fits, then bisect.
     const double upper_bound = double(size) / std::sqrt(std::max(total_area, 1e-300));
     double fail = upper_bound, success = 0;
-    for (double s = upper_bound * std::sqrt(0.85); s > upper_bound * 1e-3; s *= std::sqrt(0.9)) {
-        if (fits(s)) {
+    for (double s = upper_bound * std::sqrt(0.85); s > upper_bound * 1e-3;) {
+        const std::vector<TurnedMasks> masks = rasterize_all(prepared, s, margin);
+        const double area = mask_area(masks);
+        if (area <= kMaxMaskFill * texels && pack(masks)) {
             success = s;
             break;
         }
         fail = s;
+        s *= area > kMaxMaskFill * texels ? 0.999 * std::sqrt(kMaxMaskFill * texels / area) : std::sqrt(0.9);
     }
     if (success == 0)
         throw_error(
@@ -357,10 +383,11 @@ double pack_charts(std::vector<PackChart>& charts, int size, int gutter) {
             size,
             size,
             gutter);
-    for (int iteration = 0; iteration < 7 && fail / success > 1.002; ++iteration) {
+    for (int iteration = 0; iteration < 7 && fail / success > 1.003; ++iteration) {
         const double s = std::sqrt(success * fail);
         std::vector<Placement> kept = best_placements;
-        if (fits(s)) {
+        const std::vector<TurnedMasks> masks = rasterize_all(prepared, s, margin);
+        if (mask_area(masks) <= texels && pack(masks)) {
             success = s;
         } else {
             fail = s;

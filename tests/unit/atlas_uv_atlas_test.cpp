@@ -4,6 +4,7 @@
 #include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/core/rng.h>
 #include <tdf/mesh/mesh_io.h>
 
 #include <cmath>
@@ -163,6 +164,20 @@ TEST(UvAtlas, SurvivesDegenerateDuplicateAndNonManifoldInput) {
             const Vec2f uv = out.uvs[std::size_t(out.uv_triangles[f][k])];
             EXPECT_FALSE(uv.x == 0.0f && uv.y == 0.0f) << "face " << f << " corner " << k << " at the origin";
         }
+}
+
+TEST(UvAtlas, RandomTriangleSoupWithSharedAndFlippedFacesStaysValid) {
+    // Random triangles over a small vertex pool: shared vertices, random windings, slivers,
+    // non-manifold fans and intersecting faces all at once.
+    Rng rng(11);
+    TriangleMesh mesh;
+    for (int i = 0; i < 60; ++i) mesh.positions.emplace_back(rng.uniform(), rng.uniform(), rng.uniform());
+    for (int i = 0; i < 120; ++i)
+        mesh.triangles.push_back({rng.uniform_int(0, 60), rng.uniform_int(0, 60), rng.uniform_int(0, 60)});
+    AtlasReport report;
+    build_atlas(mesh, unwrap(1024), &report);
+    expect_valid_layout(report, "soup");
+    EXPECT_EQ(report.faces, 120u);
 }
 
 TEST(UvAtlas, KeepsExistingUvsUnlessAskedAndRejectsBadOptions) {
