@@ -6,19 +6,22 @@
 ///     Edges with more than two faces or with inconsistently oriented faces are seams (the
 ///     non-manifold edge is split), as are "sharp" edges (dihedral angle > `sharp_angle`).
 ///  2. Grow charts from seeds over the remaining edges, always taking the candidate face whose
-///     normal is closest to the chart's mean normal (ties: nearest to the seed), stopping at a
-///     normal-cone bound (`cone_angle`). This keeps charts nearly developable.
-///  3. Flatten each chart with CGAL (LSCM; ARAP when LSCM stretches too much), then check it: a topological
-///     disk, every triangle positively oriented (a chart whose triangles all come out clockwise is
-///     un-mirrored by flipping u; a mix is rejected), no self-overlap, and L2 stretch within
-///     `max_stretch`. A chart that fails is cut in two across its longest axis and retried, down
-///     to single triangles, which always succeed. Charts are scaled to their true 3-D area.
-///  4. Zero-area faces join a neighbouring chart (their corners take the UVs of coincident chart
+///     normal is closest to the chart's mean normal (plus a small pull toward the seed), stopping
+///     at a normal-cone bound (`cone_angle`); then smooth saw-toothed chart borders. This keeps
+///     charts nearly developable.
+///  3. Flatten each chart with CGAL (LSCM; with ChartFlattening::Arap, ARAP when LSCM stretches
+///     too much), then check it: a topological disk, every triangle counter-clockwise (a chart
+///     that comes out clockwise is un-mirrored by flipping u; a mix is rejected), no
+///     self-overlap, L2 stretch within `max_stretch`, and at least 35 % of its convex hull
+///     filled (thin arcs waste atlas space). A chart that fails is cut in two across its longest
+///     axis and retried, down to single triangles, which always succeed. Charts are scaled to
+///     their true 3-D area, so texel density is uniform.
+///  4. Zero-area faces join a chart they touch (their corners take the UVs of coincident chart
 ///     vertices) or, when isolated, get a tiny chart of their own: every face is mapped.
-///  5. Pack: each chart is turned to its minimal-area bounding rectangle, rasterized
-///     conservatively at the candidate scale, dilated by half the gutter, and dropped onto a
-///     skyline trying four 90-degree turns (never a reflection). A binary search finds the
-///     largest scale at which every chart fits in the square.
+///  5. Pack (pack_charts): each chart is turned to its minimal-area bounding rectangle,
+///     rasterized conservatively at the candidate scale, dilated by half the gutter, and placed
+///     at the lowest free position of a texel bitmap over four quarter turns (never a
+///     reflection). A search over the scale finds the largest at which every chart fits.
 /// Output faces and position indices are the input's (only `uvs`/`uv_triangles` and tangents
 /// change), so per-face data and bakes carry over.
 #include <tdf/mesh/triangle_mesh.h>
