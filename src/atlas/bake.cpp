@@ -1,5 +1,4 @@
 #include <tdf/atlas/bake.h>
-
 #include <tdf/atlas/gutter.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
@@ -8,7 +7,8 @@ namespace tdf {
 
 Image bake_vertex_colors(const TriangleMesh& mesh, int size) {
     if (!mesh.has_colors()) throw_error("{}: the mesh has no vertex colours to bake", mesh.source_path);
-    const UvRaster raster = rasterize_uv(mesh, size);
+    UvRaster raster = rasterize_uv(mesh, size);
+    add_partial_texels(mesh, raster);
     Image image = interpolate_vertex_attribute(mesh, raster, mesh.colors);
     dilate_gutter(image, raster.triangle, 0);
     return image;
@@ -16,15 +16,20 @@ Image bake_vertex_colors(const TriangleMesh& mesh, int size) {
 
 Image rebake_texture(const TriangleMesh& source, const Image& texture, const TriangleMesh& target, int size) {
     if (texture.empty()) throw_error("{}: no texture to re-bake", source.source_path);
-    if (!source.has_uvs()) throw_error("{}: the source mesh has no UVs to read the texture through", source.source_path);
+    if (!source.has_uvs())
+        throw_error("{}: the source mesh has no UVs to read the texture through", source.source_path);
     if (source.triangles.size() != target.triangles.size())
-        throw_error("{}: cannot re-bake onto a mesh with different faces ({} vs {})", source.source_path,
-                    source.triangles.size(), target.triangles.size());
+        throw_error("{}: cannot re-bake onto a mesh with different faces ({} vs {})",
+                    source.source_path,
+                    source.triangles.size(),
+                    target.triangles.size());
     for (std::size_t f = 0; f < source.triangles.size(); ++f)
         for (int k = 0; k < 3; ++k)
             if (source.triangles[f][k] != target.triangles[f][k])
-                throw_error("{}: cannot re-bake: face {} differs between the meshes", source.source_path, f + 1);
-    const UvRaster raster = rasterize_uv(target, size);
+                throw_error(
+                    "{}: cannot re-bake: face {} differs between the meshes", source.source_path, f + 1);
+    UvRaster raster = rasterize_uv(target, size);
+    add_partial_texels(target, raster);
     Image image(size, size, texture.channels());
     parallel_for(raster.texel_count(), 4096, [&](std::size_t begin, std::size_t end) {
         for (std::size_t t = begin; t < end; ++t) {

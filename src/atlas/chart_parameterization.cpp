@@ -1,12 +1,11 @@
 // All of tdf's CGAL use is in this translation unit (compile time, see the header).
-#include <tdf/atlas/chart_parameterization.h>
-
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_parameterization/ARAP_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/LSCM_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/parameterize.h>
+#include <tdf/atlas/chart_parameterization.h>
 
 #include <cmath>
 #include <exception>
@@ -28,8 +27,8 @@ bool flatten_chart(const std::vector<Vec3f>& positions, const std::vector<Vec3i>
         vertices.reserve(positions.size());
         for (const Vec3f& p : positions) vertices.push_back(mesh.add_vertex(Kernel::Point_3(p.x, p.y, p.z)));
         for (const Vec3i& t : triangles) {
-            const auto face = mesh.add_face(vertices[std::size_t(t.x)], vertices[std::size_t(t.y)],
-                                            vertices[std::size_t(t.z)]);
+            const auto face = mesh.add_face(
+                vertices[std::size_t(t.x)], vertices[std::size_t(t.y)], vertices[std::size_t(t.z)]);
             if (face == SurfaceMesh::null_face()) return false;  // non-manifold or inconsistent
         }
         const auto border = CGAL::Polygon_mesh_processing::longest_border(mesh).first;
@@ -51,14 +50,18 @@ bool flatten_chart(const std::vector<Vec3f>& positions, const std::vector<Vec3i>
             // result); LSCM then gives the answer.
             using Arap = SMP::ARAP_parameterizer_3<SurfaceMesh>;
             try {
-                const SMP::Error_code status = SMP::parameterize(
-                    mesh, Arap(Arap::Border_parameterizer(), Arap::Solver_traits(), 1000.0, 30), border, uv_map);
+                const SMP::Error_code status =
+                    SMP::parameterize(mesh,
+                                      Arap(Arap::Border_parameterizer(), Arap::Solver_traits(), 1000.0, 30),
+                                      border,
+                                      uv_map);
                 if (status == SMP::OK && extract()) return true;
             } catch (const std::exception&) {
                 // fall through to LSCM
             }
         }
-        const SMP::Error_code status = SMP::parameterize(mesh, SMP::LSCM_parameterizer_3<SurfaceMesh>(), border, uv_map);
+        const SMP::Error_code status =
+            SMP::parameterize(mesh, SMP::LSCM_parameterizer_3<SurfaceMesh>(), border, uv_map);
         return status == SMP::OK && extract();
     } catch (const std::exception&) {
         // CGAL reports precondition failures (e.g. a border it cannot handle) by throwing.

@@ -1,5 +1,4 @@
 #include <tdf/atlas/gutter.h>
-
 #include <tdf/core/error.h>
 
 #include <cstdint>
@@ -55,7 +54,8 @@ void dilate_gutter(Image& image, const std::vector<int>& coverage, int texels) {
                     weight += wt;
                 }
             TDF_CHECK(weight > 0.0f);
-            for (int c = 0; c < channels; ++c) values[k * std::size_t(channels) + std::size_t(c)] = sum[std::size_t(c)] / weight;
+            for (int c = 0; c < channels; ++c)
+                values[k * std::size_t(channels) + std::size_t(c)] = sum[std::size_t(c)] / weight;
         }
         for (std::size_t k = 0; k < frontier.size(); ++k) {
             float* p = image.pixel(frontier[k] % w, frontier[k] / w);

@@ -1,8 +1,7 @@
 // Chart segmentation, flattening and assembly of the UV atlas (pipeline in uv_atlas.h).
-#include <tdf/atlas/uv_atlas.h>
-
 #include <tdf/atlas/chart_packing.h>
 #include <tdf/atlas/chart_parameterization.h>
+#include <tdf/atlas/uv_atlas.h>
 #include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
@@ -40,11 +39,11 @@ D3 normalized(D3 a) {
 // inconsistently oriented edges, and edges of degenerate faces.
 struct Surface {
     const TriangleMesh* mesh = nullptr;
-    std::vector<int> welded;                    // per position
-    std::vector<D3> normal, centroid;           // per face
-    std::vector<double> area;                   // per face
-    std::vector<std::uint8_t> degenerate;       // per face
-    std::vector<std::array<int, 3>> neighbour;  // per face edge
+    std::vector<int> welded;                         // per position
+    std::vector<D3> normal, centroid;                // per face
+    std::vector<double> area;                        // per face
+    std::vector<std::uint8_t> degenerate;            // per face
+    std::vector<std::array<int, 3>> neighbour;       // per face edge
     std::vector<std::array<int, 3>> neighbour_edge;  // the same edge's slot in the neighbour
     double diagonal = 1;
 
@@ -70,8 +69,9 @@ Surface analyse_surface(const TriangleMesh& mesh) {
     s.welded.resize(mesh.positions.size());
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
         const Vec3f p = mesh.positions[i] - bounds.lower;
-        const std::array<std::int64_t, 3> key = {std::int64_t(std::llround(p.x / cell)), std::int64_t(std::llround(p.y / cell)),
-                                                  std::int64_t(std::llround(p.z / cell))};
+        const std::array<std::int64_t, 3> key = {std::int64_t(std::llround(p.x / cell)),
+                                                 std::int64_t(std::llround(p.y / cell)),
+                                                 std::int64_t(std::llround(p.z / cell))};
         s.welded[i] = ids.emplace(key, int(ids.size())).first->second;
     }
 
@@ -89,8 +89,7 @@ Surface analyse_surface(const TriangleMesh& mesh) {
         s.area[f] = 0.5 * std::sqrt(dot(n, n));
         s.normal[f] = normalized(n);
         s.centroid[f] = (a + b + c) * (1.0 / 3.0);
-        const int w0 = s.vertex(int(f), 0), w1 = s.vertex(int(f), 1), w2 = s.vertex(int(f), 2);
-        s.degenerate[f] = !(s.area[f] > min_area) || w0 == w1 || w1 == w2 || w0 == w2;
+        s.degenerate[f] = !(s.area[f] > min_area);
     }
 
     // Edges: sort (undirected key, face, slot) and link exactly-two-face, opposite-direction pairs.
@@ -105,12 +104,14 @@ Surface analyse_surface(const TriangleMesh& mesh) {
         if (s.degenerate[f]) continue;
         for (int k = 0; k < 3; ++k) {
             const int a = s.vertex(int(f), k), b = s.vertex(int(f), (k + 1) % 3);
+            if (a == b) continue;  // corners welded together: no edge to cross
             const auto lo = std::uint64_t(std::min(a, b)), hi = std::uint64_t(std::max(a, b));
             edges.push_back({(lo << 32) | hi, int(f), k, a < b});
         }
     }
     std::sort(edges.begin(), edges.end(), [](const EdgeEntry& x, const EdgeEntry& y) {
-        return x.key < y.key || (x.key == y.key && (x.face < y.face || (x.face == y.face && x.slot < y.slot)));
+        return x.key < y.key ||
+               (x.key == y.key && (x.face < y.face || (x.face == y.face && x.slot < y.slot)));
     });
     s.neighbour.assign(faces, {-1, -1, -1});
     s.neighbour_edge.assign(faces, {-1, -1, -1});
@@ -139,20 +140,23 @@ void smooth_chart_borders(const Surface& s, double cos_sharp, double cos_cone, s
         std::vector<D3> normal_sum(chart_count);
         for (std::size_t f = 0; f < faces; ++f)
             if (chart_of[f] >= 0)
-                normal_sum[std::size_t(chart_of[f])] = normal_sum[std::size_t(chart_of[f])] + s.normal[f] * s.area[f];
+                normal_sum[std::size_t(chart_of[f])] =
+                    normal_sum[std::size_t(chart_of[f])] + s.normal[f] * s.area[f];
         std::size_t moved = 0;
         for (std::size_t f = 0; f < faces; ++f) {
             if (chart_of[f] < 0) continue;
             int other[3], count = 0;
             for (int k = 0; k < 3; ++k) {
                 const int g = s.neighbour[f][k];
-                if (g >= 0 && chart_of[std::size_t(g)] != chart_of[f] && dot(s.normal[f], s.normal[std::size_t(g)]) >= cos_sharp)
+                if (g >= 0 && chart_of[std::size_t(g)] != chart_of[f] &&
+                    dot(s.normal[f], s.normal[std::size_t(g)]) >= cos_sharp)
                     other[count++] = chart_of[std::size_t(g)];
             }
             int target = -1;
             if (count >= 2 && other[0] == other[1]) target = other[0];
             if (count == 3 && (other[0] == other[2] || other[1] == other[2])) target = other[2];
-            if (target < 0 || dot(s.normal[f], normalized(normal_sum[std::size_t(target)])) < cos_cone) continue;
+            if (target < 0 || dot(s.normal[f], normalized(normal_sum[std::size_t(target)])) < cos_cone)
+                continue;
             chart_of[f] = target;
             ++moved;
         }
@@ -162,6 +166,8 @@ void smooth_chart_borders(const Surface& s, double cos_sharp, double cos_cone, s
 
 // Greedy chart growth: the candidate closest in normal to the chart's mean (then nearest the
 // seed) joins while it stays inside the normal cone; sharp edges are never crossed.
+constexpr double kDistanceWeight = 0.5;
+
 std::vector<std::vector<int>> grow_charts(const Surface& s, const AtlasOptions& options) {
     const std::size_t faces = s.normal.size();
     const double cos_sharp = std::cos(double(radians(options.sharp_angle)));
@@ -184,8 +190,12 @@ std::vector<std::vector<int>> grow_charts(const Surface& s, const AtlasOptions& 
                 const int g = s.neighbour[std::size_t(f)][k];
                 if (g < 0 || chart_of[std::size_t(g)] >= 0) continue;
                 if (dot(s.normal[std::size_t(f)], s.normal[std::size_t(g)]) < cos_sharp) continue;
+                // Normal deviation plus distance to the seed (over the diagonal, weighted
+                // kDistanceWeight): among faces of similar normal the nearest joins first, so flat
+                // regions grow as compact discs rather than in face order.
                 const D3 offset = s.centroid[std::size_t(g)] - s.centroid[seed];
-                const double cost = (1.0 - dot(s.normal[std::size_t(g)], mean)) + 0.5 * std::sqrt(dot(offset, offset)) / s.diagonal;
+                const double cost = (1.0 - dot(s.normal[std::size_t(g)], mean)) +
+                                    kDistanceWeight * std::sqrt(dot(offset, offset)) / s.diagonal;
                 queue.emplace(cost, g);
             }
         };
@@ -203,8 +213,9 @@ std::vector<std::vector<int>> grow_charts(const Surface& s, const AtlasOptions& 
     for (auto& members : charts) members.clear();
     for (std::size_t f = 0; f < faces; ++f)
         if (chart_of[f] >= 0) charts[std::size_t(chart_of[f])].push_back(int(f));
-    charts.erase(std::remove_if(charts.begin(), charts.end(), [](const std::vector<int>& c) { return c.empty(); }),
-                 charts.end());
+    charts.erase(
+        std::remove_if(charts.begin(), charts.end(), [](const std::vector<int>& c) { return c.empty(); }),
+        charts.end());
     return charts;
 }
 
@@ -212,9 +223,9 @@ std::vector<std::vector<int>> grow_charts(const Surface& s, const AtlasOptions& 
 // local vertices of its corners.
 struct FlatChart {
     std::vector<int> faces;
-    std::vector<Vec3i> corners;   // per face: local vertex ids
-    std::vector<Vec2f> uvs;       // per local vertex
-    std::vector<int> vertex_of;   // per local vertex: welded vertex
+    std::vector<Vec3i> corners;  // per face: local vertex ids
+    std::vector<Vec2f> uvs;      // per local vertex
+    std::vector<int> vertex_of;  // per local vertex: welded vertex
 };
 
 struct FlattenOutcome {
@@ -224,7 +235,8 @@ struct FlattenOutcome {
 };
 
 int find_root(std::vector<int>& parent, int x) {
-    while (parent[std::size_t(x)] != x) x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
+    while (parent[std::size_t(x)] != x)
+        x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
     return x;
 }
 
@@ -243,12 +255,55 @@ std::vector<std::vector<int>> split_in_two(const Surface& s, const std::vector<i
         return axis == 0 ? c.x : (axis == 1 ? c.y : c.z);
     };
     std::vector<int> sorted = faces;
-    std::stable_sort(sorted.begin(), sorted.end(), [&](int a, int b) { return coordinate(a) < coordinate(b); });
+    std::stable_sort(
+        sorted.begin(), sorted.end(), [&](int a, int b) { return coordinate(a) < coordinate(b); });
     const auto half = std::ptrdiff_t(sorted.size() / 2);
     std::vector<int> a(sorted.begin(), sorted.begin() + half), b(sorted.begin() + half, sorted.end());
     std::sort(a.begin(), a.end());
     std::sort(b.begin(), b.end());
     return {a, b};
+}
+
+enum class ChartCheck { Ok, TooStretched, Invalid };
+
+// A chart filling less of its convex hull than this (a thin arc, a ring with an appendage) wastes
+// atlas space around it: it is split. Charts of fewer faces are left alone.
+constexpr double kMinHullFill = 0.35;
+constexpr std::size_t kMinFacesToSplitSparse = 16;
+
+// Charts up to this size may be re-flattened with ARAP (about 1 s per 20k faces here).
+constexpr std::size_t kArapMaxFaces = 20000;
+
+// Un-mirrors a flattened chart that came out clockwise, scales it to its 3-D area, and checks
+// it: every triangle counter-clockwise, no self-overlap, L2 stretch within the bound.
+ChartCheck orient_scale_and_check(const Surface& s, const std::vector<int>& faces,
+                                  const std::vector<Vec3f>& positions, const std::vector<Vec3i>& corners,
+                                  const AtlasOptions& options, std::vector<Vec2f>& uvs) {
+    double uv_area2 = 0, area3 = 0;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+        const Vec3i c = corners[i];
+        uv_area2 += signed_uv_area2(uvs[std::size_t(c.x)], uvs[std::size_t(c.y)], uvs[std::size_t(c.z)]);
+        area3 += s.area[std::size_t(faces[i])];
+    }
+    if (!(std::abs(uv_area2) > 0)) return ChartCheck::Invalid;
+    if (uv_area2 < 0)
+        for (Vec2f& uv : uvs) uv.x = -uv.x;
+    const float scale = float(std::sqrt(area3 / (0.5 * std::abs(uv_area2))));
+    for (Vec2f& uv : uvs) uv = uv * scale;
+    double stretch_sum = 0;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+        const Vec3i c = corners[i];
+        const std::array<Vec2f, 3> p = {uvs[std::size_t(c.x)], uvs[std::size_t(c.y)], uvs[std::size_t(c.z)]};
+        if (!(signed_uv_area2(p[0], p[1], p[2]) > 0)) return ChartCheck::Invalid;
+        const std::array<Vec3f, 3> q = {
+            positions[std::size_t(c.x)], positions[std::size_t(c.y)], positions[std::size_t(c.z)]};
+        stretch_sum += l2_stretch_squared(q, p) * s.area[std::size_t(faces[i])];
+    }
+    // Ten times stricter than the report's tolerance, so that rounding packed UVs to float
+    // cannot turn a pinched border into a reported overlap.
+    if (count_overlapping_pairs(uvs, corners, true, 0.1 * kOverlapTolerance) > 0) return ChartCheck::Invalid;
+    return std::sqrt(stretch_sum / area3) > double(options.max_stretch) ? ChartCheck::TooStretched
+                                                                        : ChartCheck::Ok;
 }
 
 FlattenOutcome flatten(const Surface& s, const std::vector<int>& faces, const AtlasOptions& options) {
@@ -272,7 +327,9 @@ FlattenOutcome flatten(const Surface& s, const std::vector<int>& faces, const At
             ++internal_halfedges;
             const int j = it->second, l = s.neighbour_edge[std::size_t(faces[i])][k];
             // Edge k of face i runs corner k -> k+1; in face j the same edge runs l+1 -> l.
-            const auto unite = [&](int x, int y) { parent[std::size_t(find_root(parent, x))] = find_root(parent, y); };
+            const auto unite = [&](int x, int y) {
+                parent[std::size_t(find_root(parent, x))] = find_root(parent, y);
+            };
             unite(int(i) * 3 + k, j * 3 + (l + 1) % 3);
             unite(int(i) * 3 + (k + 1) % 3, j * 3 + l);
             component[std::size_t(find_root(component, int(i)))] = find_root(component, j);
@@ -301,17 +358,27 @@ FlattenOutcome flatten(const Surface& s, const std::vector<int>& faces, const At
             const int root = find_root(parent, int(i) * 3 + k);
             const auto [it, inserted] = local_of_root.emplace(root, int(local_positions.size()));
             if (inserted) {
-                local_positions.push_back(s.mesh->positions[std::size_t(s.mesh->triangles[std::size_t(faces[i])][k])]);
+                local_positions.push_back(
+                    s.mesh->positions[std::size_t(s.mesh->triangles[std::size_t(faces[i])][k])]);
                 chart.vertex_of.push_back(s.vertex(faces[i], k));
             }
             chart.corners[i][k] = it->second;
         }
 
     if (n == 1) {  // a lone triangle: lay it out exactly
-        const Vec3f a = local_positions[0], b = local_positions[1], c = local_positions[2];
+        // Along its longest edge, so a needle with two nearly coincident corners stays exact.
+        int k = 0;
+        for (int e = 1; e < 3; ++e)
+            if (length(local_positions[std::size_t((e + 1) % 3)] - local_positions[std::size_t(e)]) >
+                length(local_positions[std::size_t((k + 1) % 3)] - local_positions[std::size_t(k)]))
+                k = e;
+        const std::size_t i0 = std::size_t(k), i1 = std::size_t((k + 1) % 3), i2 = std::size_t((k + 2) % 3);
+        const Vec3f a = local_positions[i0], b = local_positions[i1], c = local_positions[i2];
         const float ab = length(b - a);
         const Vec3f x_axis = (b - a) / ab;
-        chart.uvs = {{0, 0}, {ab, 0}, {dot(c - a, x_axis), float(2.0 * s.area[std::size_t(faces[0])] / ab)}};
+        chart.uvs.assign(3, Vec2f{});
+        chart.uvs[i1] = {ab, 0};
+        chart.uvs[i2] = {dot(c - a, x_axis), float(2.0 * s.area[std::size_t(faces[0])] / ab)};
         out.ok = true;
         return out;
     }
@@ -322,48 +389,48 @@ FlattenOutcome flatten(const Surface& s, const std::vector<int>& faces, const At
     // Euler characteristic V - E + F must be 1 for a disk (connected, one border).
     const std::size_t edges = internal_halfedges / 2 + (3 * n - internal_halfedges);
     if (long(local_positions.size()) - long(edges) + long(n) != 1) return fail();
-    if (!flatten_chart(local_positions, chart.corners, options.flattening == ChartFlattening::Arap, chart.uvs))
-        return fail();
-
-    // Orientation: un-mirror a chart that came out clockwise; any remaining flip fails it.
-    double uv_area2 = 0, area3 = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3i c = chart.corners[i];
-        uv_area2 += signed_uv_area2(chart.uvs[std::size_t(c.x)], chart.uvs[std::size_t(c.y)], chart.uvs[std::size_t(c.z)]);
-        area3 += s.area[std::size_t(faces[i])];
+    if (!flatten_chart(local_positions, chart.corners, false, chart.uvs)) return fail();
+    ChartCheck check = orient_scale_and_check(s, faces, local_positions, chart.corners, options, chart.uvs);
+    // ARAP only where conformal flattening stretches too much: it costs ~3x LSCM per solve.
+    if (check == ChartCheck::TooStretched && options.flattening == ChartFlattening::Arap &&
+        n <= kArapMaxFaces) {
+        std::vector<Vec2f> arap_uvs;
+        if (flatten_chart(local_positions, chart.corners, true, arap_uvs) &&
+            orient_scale_and_check(s, faces, local_positions, chart.corners, options, arap_uvs) ==
+                ChartCheck::Ok) {
+            chart.uvs = std::move(arap_uvs);
+            check = ChartCheck::Ok;
+        }
     }
-    if (uv_area2 < 0)
-        for (Vec2f& uv : chart.uvs) uv.x = -uv.x;
-    if (!(std::abs(uv_area2) > 0)) return fail();
-    const float scale = float(std::sqrt(area3 / (0.5 * std::abs(uv_area2))));
-    for (Vec2f& uv : chart.uvs) uv = uv * scale;
-    double stretch_sum = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3i c = chart.corners[i];
-        const std::array<Vec2f, 3> p = {chart.uvs[std::size_t(c.x)], chart.uvs[std::size_t(c.y)], chart.uvs[std::size_t(c.z)]};
-        if (!(signed_uv_area2(p[0], p[1], p[2]) > 0)) return fail();
-        const std::array<Vec3f, 3> q = {local_positions[std::size_t(c.x)], local_positions[std::size_t(c.y)],
-                                        local_positions[std::size_t(c.z)]};
-        stretch_sum += l2_stretch_squared(q, p) * s.area[std::size_t(faces[i])];
+    if (check != ChartCheck::Ok) return fail();
+    if (n >= kMinFacesToSplitSparse) {
+        double area = 0;
+        for (const Vec3i& c : chart.corners)
+            area += 0.5 * signed_uv_area2(chart.uvs[std::size_t(c.x)],
+                                          chart.uvs[std::size_t(c.y)],
+                                          chart.uvs[std::size_t(c.z)]);
+        if (area < kMinHullFill * polygon_area(convex_hull(chart.uvs))) return fail();
     }
-    if (std::sqrt(stretch_sum / area3) > double(options.max_stretch)) return fail();
-    if (count_overlapping_pairs(chart.uvs, chart.corners, true) > 0) return fail();
     out.ok = true;
     return out;
 }
 
 void validate_options(const AtlasOptions& o) {
-    if (o.size < 16 || o.size > 16384) throw_error("atlas: --size {} is out of range [16, 16384]", o.size);
-    if (o.gutter < 0 || o.gutter > 64) throw_error("atlas: --gutter {} is out of range [0, 64]", o.gutter);
+    if (o.size < 16 || o.size > 16384)
+        throw_error("atlas size {} is out of range [16, 16384] texels", o.size);
+    if (o.gutter < 0 || o.gutter > 64)
+        throw_error("atlas gutter {} is out of range [0, 64] texels", o.gutter);
     if (!(o.sharp_angle > 0 && o.sharp_angle <= 180))
-        throw_error("atlas: sharp angle {} is out of range (0, 180] degrees", o.sharp_angle);
-    if (!(o.cone_angle > 0 && o.cone_angle < 90)) throw_error("atlas: cone angle {} is out of range (0, 90) degrees", o.cone_angle);
-    if (!(o.max_stretch >= 1)) throw_error("atlas: maximum stretch {} must be at least 1", o.max_stretch);
+        throw_error("atlas sharp angle {} is out of range (0, 180] degrees", o.sharp_angle);
+    if (!(o.cone_angle > 0 && o.cone_angle < 90))
+        throw_error("atlas cone angle {} is out of range (0, 90) degrees", o.cone_angle);
+    if (!(o.max_stretch >= 1)) throw_error("atlas maximum stretch {} must be at least 1", o.max_stretch);
 }
 
 // Every face gets UVs: flattened charts, then zero-area faces glued to a chart they touch (their
 // corners reuse its UVs), else a small triangle of their own.
-TriangleMesh assemble(const TriangleMesh& mesh, const Surface& s, std::vector<FlatChart>& charts, const AtlasOptions& options) {
+TriangleMesh assemble(const TriangleMesh& mesh, const Surface& s, std::vector<FlatChart>& charts,
+                      const AtlasOptions& options) {
     const std::size_t faces = mesh.triangles.size();
     std::vector<int> chart_of(faces, -1), local_of(faces, -1);
     for (std::size_t c = 0; c < charts.size(); ++c)
@@ -374,7 +441,8 @@ TriangleMesh assemble(const TriangleMesh& mesh, const Surface& s, std::vector<Fl
     // (chart, welded vertex) -> local vertex, the first one in chart order.
     std::vector<std::unordered_map<int, int>> vertex_in(charts.size());
     for (std::size_t c = 0; c < charts.size(); ++c)
-        for (std::size_t v = 0; v < charts[c].vertex_of.size(); ++v) vertex_in[c].emplace(charts[c].vertex_of[v], int(v));
+        for (std::size_t v = 0; v < charts[c].vertex_of.size(); ++v)
+            vertex_in[c].emplace(charts[c].vertex_of[v], int(v));
 
     double mean_area = 0;
     for (const double a : s.area) mean_area += a;
@@ -449,7 +517,9 @@ TriangleMesh assemble(const TriangleMesh& mesh, const Surface& s, std::vector<Fl
         const int c = chart_of[f];
         TDF_CHECK(c >= 0);
         const Vec3i local = charts[std::size_t(c)].corners[std::size_t(local_of[f])];
-        out.uv_triangles[f] = {local.x + offset[std::size_t(c)], local.y + offset[std::size_t(c)], local.z + offset[std::size_t(c)]};
+        out.uv_triangles[f] = {local.x + offset[std::size_t(c)],
+                               local.y + offset[std::size_t(c)],
+                               local.z + offset[std::size_t(c)]};
     }
     return out;
 }
@@ -459,14 +529,20 @@ TriangleMesh assemble(const TriangleMesh& mesh, const Surface& s, std::vector<Fl
 TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, AtlasReport* report) {
     const auto start = std::chrono::steady_clock::now();
     validate_options(options);
-    if (mesh.triangles.empty()) throw_error("{}: cannot build a UV atlas for a mesh without faces", mesh.source_path);
+    if (mesh.triangles.empty())
+        throw_error("{}: cannot build a UV atlas for a mesh without faces", mesh.source_path);
     const bool unwrap = options.reunwrap || !mesh.has_uvs();
     TriangleMesh out;
     if (!unwrap) {
         out = mesh;
     } else {
+        const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+            return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+        };
         const Surface surface = analyse_surface(mesh);
         std::vector<std::vector<int>> pending = grow_charts(surface, options);
+        log_verbose("atlas: {} charts grown in {:.2f} s", pending.size(), seconds_since(start));
+        const auto flatten_start = std::chrono::steady_clock::now();
         std::vector<FlatChart> charts;
         // Rounds of parallel flattening; failed charts come back split. Results are collected
         // in list order, so the atlas does not depend on the thread count.
@@ -484,7 +560,10 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
             }
             pending.swap(next);
         }
+        log_verbose("atlas: {} charts flattened in {:.2f} s", charts.size(), seconds_since(flatten_start));
+        const auto pack_start = std::chrono::steady_clock::now();
         out = assemble(mesh, surface, charts, options);
+        log_verbose("atlas: packed in {:.2f} s", seconds_since(pack_start));
         if (out.normals.size() != out.positions.size()) compute_normals(out);
         compute_tangents(out, TangentMode::Handed);
     }

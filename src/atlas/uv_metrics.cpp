@@ -36,7 +36,8 @@ double l2_stretch_squared(const std::array<Vec3f, 3>& q, const std::array<Vec2f,
     const double s0 = p[0].x, s1 = p[1].x, s2 = p[2].x, t0 = p[0].y, t1 = p[1].y, t2 = p[2].y;
     const D3 q0 = to_d3(q[0]), q1 = to_d3(q[1]), q2 = to_d3(q[2]);
     const auto combine = [&](double w0, double w1, double w2) {
-        return D3{(q0.x * w0 + q1.x * w1 + q2.x * w2) / area2, (q0.y * w0 + q1.y * w1 + q2.y * w2) / area2,
+        return D3{(q0.x * w0 + q1.x * w1 + q2.x * w2) / area2,
+                  (q0.y * w0 + q1.y * w1 + q2.y * w2) / area2,
                   (q0.z * w0 + q1.z * w1 + q2.z * w2) / area2};
     };
     const D3 ds = combine(t1 - t2, t2 - t0, t0 - t1);  // dq/du
@@ -48,14 +49,73 @@ AngleDistortion angle_distortion(const std::array<Vec3f, 3>& q, const std::array
     AngleDistortion result;
     for (int k = 0; k < 3; ++k) {
         const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-        const double a3 = corner_angle(to_d3(q[std::size_t(k)]), to_d3(q[std::size_t(k1)]), to_d3(q[std::size_t(k2)]));
-        const D3 a{p[std::size_t(k)].x, p[std::size_t(k)].y, 0}, b{p[std::size_t(k1)].x, p[std::size_t(k1)].y, 0},
+        const double a3 =
+            corner_angle(to_d3(q[std::size_t(k)]), to_d3(q[std::size_t(k1)]), to_d3(q[std::size_t(k2)]));
+        const D3 a{p[std::size_t(k)].x, p[std::size_t(k)].y, 0},
+            b{p[std::size_t(k1)].x, p[std::size_t(k1)].y, 0},
             c{p[std::size_t(k2)].x, p[std::size_t(k2)].y, 0};
         const double d = std::abs(corner_angle(a, b, c) - a3) * (180.0 / 3.14159265358979323846);
         result.max = std::max(result.max, d);
         result.sum += d;
     }
     return result;
+}
+
+bool triangle_touches_box(const double (&xs)[3], const double (&ys)[3], double x0, double y0, double x1,
+                          double y1) {
+    if (std::max({xs[0], xs[1], xs[2]}) < x0 || std::min({xs[0], xs[1], xs[2]}) > x1 ||
+        std::max({ys[0], ys[1], ys[2]}) < y0 || std::min({ys[0], ys[1], ys[2]}) > y1)
+        return false;
+    const double corner_x[4] = {x0, x1, x0, x1}, corner_y[4] = {y0, y0, y1, y1};
+    for (int k = 0; k < 3; ++k) {
+        const int k1 = (k + 1) % 3;
+        const double nx = ys[k] - ys[k1], ny = xs[k1] - xs[k];  // a normal of edge k
+        if (nx == 0.0 && ny == 0.0) continue;
+        double tri_lo = 1e300, tri_hi = -1e300, box_lo = 1e300, box_hi = -1e300;
+        for (int j = 0; j < 3; ++j) {
+            const double d = xs[j] * nx + ys[j] * ny;
+            tri_lo = std::min(tri_lo, d);
+            tri_hi = std::max(tri_hi, d);
+        }
+        for (int j = 0; j < 4; ++j) {
+            const double d = corner_x[j] * nx + corner_y[j] * ny;
+            box_lo = std::min(box_lo, d);
+            box_hi = std::max(box_hi, d);
+        }
+        if (tri_hi < box_lo || box_hi < tri_lo) return false;
+    }
+    return true;
+}
+
+std::vector<Vec2f> convex_hull(std::vector<Vec2f> points) {
+    std::sort(points.begin(), points.end(), [](Vec2f a, Vec2f b) {
+        return a.x < b.x || (a.x == b.x && a.y < b.y);
+    });
+    points.erase(
+        std::unique(points.begin(), points.end(), [](Vec2f a, Vec2f b) { return a.x == b.x && a.y == b.y; }),
+        points.end());
+    if (points.size() < 3) return points;
+    std::vector<Vec2f> hull(2 * points.size());
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        while (k >= 2 && signed_uv_area2(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+        hull[k++] = points[i];
+    }
+    for (std::size_t i = points.size() - 1, lower = k + 1; i > 0; --i) {
+        while (k >= lower && signed_uv_area2(hull[k - 2], hull[k - 1], points[i - 1]) <= 0) --k;
+        hull[k++] = points[i - 1];
+    }
+    hull.resize(k - 1);
+    return hull;
+}
+
+double polygon_area(const std::vector<Vec2f>& polygon) {
+    double twice = 0;
+    for (std::size_t i = 0; i < polygon.size(); ++i) {
+        const Vec2f a = polygon[i], b = polygon[(i + 1) % polygon.size()];
+        twice += double(a.x) * b.y - double(b.x) * a.y;
+    }
+    return 0.5 * twice;
 }
 
 namespace {
@@ -66,8 +126,9 @@ struct UvTriangle {
 };
 
 // True when the interiors of a and b overlap (no separating axis among the 6 edge normals).
-bool interiors_overlap(const UvTriangle& a, const UvTriangle& b) {
-    const double size = std::max({a.max_x - a.min_x, a.max_y - a.min_y, b.max_x - b.min_x, b.max_y - b.min_y});
+bool interiors_overlap(const UvTriangle& a, const UvTriangle& b, double tolerance) {
+    const double size =
+        std::max({a.max_x - a.min_x, a.max_y - a.min_y, b.max_x - b.min_x, b.max_y - b.min_y});
     for (const UvTriangle* t : {&a, &b})
         for (int k = 0; k < 3; ++k) {
             const int k1 = (k + 1) % 3;
@@ -82,7 +143,7 @@ bool interiors_overlap(const UvTriangle& a, const UvTriangle& b) {
                 b_lo = std::min(b_lo, pb);
                 b_hi = std::max(b_hi, pb);
             }
-            if (std::min(a_hi, b_hi) - std::max(a_lo, b_lo) <= 1e-6 * size * norm) return false;
+            if (std::min(a_hi, b_hi) - std::max(a_lo, b_lo) <= tolerance * size * norm) return false;
         }
     return true;
 }
@@ -90,7 +151,7 @@ bool interiors_overlap(const UvTriangle& a, const UvTriangle& b) {
 }  // namespace
 
 std::size_t count_overlapping_pairs(const std::vector<Vec2f>& uvs, const std::vector<Vec3i>& triangles,
-                                    bool stop_at_first) {
+                                    bool stop_at_first, double tolerance) {
     std::vector<UvTriangle> tris;
     tris.reserve(triangles.size());
     double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
@@ -144,12 +205,13 @@ std::size_t count_overlapping_pairs(const std::vector<Vec2f>& uvs, const std::ve
                 for (int g = e + 1; g < start[c + 1]; ++g) {
                     const UvTriangle& a = tris[std::size_t(entries[std::size_t(e)])];
                     const UvTriangle& b = tris[std::size_t(entries[std::size_t(g)])];
-                    if (a.max_x < b.min_x || b.max_x < a.min_x || a.max_y < b.min_y || b.max_y < a.min_y) continue;
+                    if (a.max_x < b.min_x || b.max_x < a.min_x || a.max_y < b.min_y || b.max_y < a.min_y)
+                        continue;
                     // Test each pair once: in the cell holding the low corner of the bounding-box overlap.
                     if (cell_of(std::max(a.min_x, b.min_x), lo_x, cell_x) != cx ||
                         cell_of(std::max(a.min_y, b.min_y), lo_y, cell_y) != cy)
                         continue;
-                    if (interiors_overlap(a, b)) {
+                    if (interiors_overlap(a, b, tolerance)) {
                         ++count;
                         if (stop_at_first) return count;
                     }

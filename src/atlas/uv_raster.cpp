@@ -1,5 +1,5 @@
+#include <tdf/atlas/uv_metrics.h>
 #include <tdf/atlas/uv_raster.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 
@@ -15,7 +15,9 @@ struct Point {
 };
 
 // Twice the signed area of (a, b, p) in texel coordinates (x right, y down).
-double edge_function(Point a, Point b, Point p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
+double edge_function(Point a, Point b, Point p) {
+    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+}
 
 // Top-left rule for a triangle with positive edge functions inside: a centre exactly on an edge
 // is kept only for "top" or "left" edges, so two triangles sharing the edge never both claim it.
@@ -31,7 +33,8 @@ std::size_t UvRaster::covered_count() const {
 }
 
 UvRaster rasterize_uv(const TriangleMesh& mesh, int size) {
-    if (!mesh.has_uvs()) throw_error("{}: cannot rasterize the UV layout of a mesh without UVs", mesh.source_path);
+    if (!mesh.has_uvs())
+        throw_error("{}: cannot rasterize the UV layout of a mesh without UVs", mesh.source_path);
     if (size < 1 || size > 16384) throw_error("UV raster size {} is out of range [1, 16384]", size);
     UvRaster raster;
     raster.size = size;
@@ -66,7 +69,8 @@ UvRaster rasterize_uv(const TriangleMesh& mesh, int size) {
         for (int i = i0; i <= i1; ++i)
             for (int j = j0; j <= j1; ++j) {
                 const Point q{j + 0.5, i + 0.5};
-                const double wa = edge_function(b, c, q), wb = edge_function(c, a, q), wc = edge_function(a, b, q);
+                const double wa = edge_function(b, c, q), wb = edge_function(c, a, q),
+                             wc = edge_function(a, b, q);
                 if (wa < 0.0 || wb < 0.0 || wc < 0.0) continue;
                 if ((wa == 0.0 && !own_bc) || (wb == 0.0 && !own_ca) || (wc == 0.0 && !own_ab)) continue;
                 const std::size_t index = std::size_t(i) * std::size_t(size) + std::size_t(j);
@@ -79,6 +83,52 @@ UvRaster rasterize_uv(const TriangleMesh& mesh, int size) {
             }
     }
     return raster;
+}
+
+void add_partial_texels(const TriangleMesh& mesh, UvRaster& raster) {
+    TDF_CHECK(mesh.has_uvs());
+    const int size = raster.size;
+    const double s = double(size);
+    for (std::size_t f = 0; f < mesh.uv_triangles.size(); ++f) {
+        double xs[3], ys[3];
+        for (int k = 0; k < 3; ++k) {
+            const Vec2f uv = mesh.uvs[std::size_t(mesh.uv_triangles[f][k])];
+            xs[k] = double(uv.x) * s;
+            ys[k] = (1.0 - double(uv.y)) * s;
+        }
+        const double area2 = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (ys[1] - ys[0]) * (xs[2] - xs[0]);
+        if (!(area2 != 0.0) || !std::isfinite(area2)) continue;
+        const int j0 = std::max(0, int(std::floor(std::min({xs[0], xs[1], xs[2]}))));
+        const int j1 = std::min(size - 1, int(std::floor(std::max({xs[0], xs[1], xs[2]}))));
+        const int i0 = std::max(0, int(std::floor(std::min({ys[0], ys[1], ys[2]}))));
+        const int i1 = std::min(size - 1, int(std::floor(std::max({ys[0], ys[1], ys[2]}))));
+        for (int i = i0; i <= i1; ++i)
+            for (int j = j0; j <= j1; ++j) {
+                const std::size_t t = std::size_t(i) * std::size_t(size) + std::size_t(j);
+                if (raster.triangle[t] >= 0 || !triangle_touches_box(xs, ys, j, i, j + 1, i + 1)) continue;
+                // The centre lies outside the triangle: its nearest point is on an edge.
+                const double px = j + 0.5, py = i + 0.5;
+                double best = 1e300;
+                Vec3f weights;
+                for (int k = 0; k < 3; ++k) {
+                    const int k1 = (k + 1) % 3;
+                    const double ex = xs[k1] - xs[k], ey = ys[k1] - ys[k];
+                    const double length2 = ex * ex + ey * ey;
+                    const double u =
+                        length2 > 0 ? std::clamp(((px - xs[k]) * ex + (py - ys[k]) * ey) / length2, 0.0, 1.0)
+                                    : 0.0;
+                    const double dx = xs[k] + u * ex - px, dy = ys[k] + u * ey - py;
+                    if (dx * dx + dy * dy < best) {
+                        best = dx * dx + dy * dy;
+                        weights = Vec3f{0, 0, 0};
+                        weights[k] = float(1.0 - u);
+                        weights[k1] = float(u);
+                    }
+                }
+                raster.triangle[t] = int(f);
+                raster.barycentric[t] = weights;
+            }
+    }
 }
 
 Image interpolate_vertex_attribute(const TriangleMesh& mesh, const UvRaster& raster,

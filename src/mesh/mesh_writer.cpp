@@ -1,14 +1,11 @@
 // OBJ/MTL and GLB writers. The GLB is written by hand (a JSON chunk and a BIN chunk) rather
 // than through tinygltf: the format is small, and this keeps the mesh module's dependencies as
 // they are.
-#include <tdf/mesh/mesh_writer.h>
-
+#include <fmt/format.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
-
-#include <fmt/format.h>
-#include <nlohmann/json.hpp>
+#include <tdf/mesh/mesh_writer.h>
 
 #include <cerrno>
 #include <cstdint>
@@ -16,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <tuple>
 
 namespace tdf {
@@ -39,33 +37,51 @@ void write_obj(const std::string& obj_path, const TriangleMesh& mesh, const ObjM
     const fs::path path(obj_path);
     const std::string mtl_name = path.stem().string() + ".mtl";
 
-    std::string mtl = fmt::format("# written by tdf\nnewmtl {}\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nillum 1\n", material.name);
+    std::string mtl =
+        fmt::format("# written by tdf\nnewmtl {}\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nillum 1\n", material.name);
     if (!material.albedo_map.empty()) mtl += fmt::format("map_Kd {}\n", material.albedo_map);
     if (!material.normal_map.empty())
         mtl += fmt::format("norm {}\nmap_Bump -bm 1 {}\n", material.normal_map, material.normal_map);
     write_text_atomically((path.parent_path() / mtl_name).string(), mtl);
 
     fmt::memory_buffer out;
-    fmt::format_to(std::back_inserter(out), "# written by tdf: {} vertices, {} faces\nmtllib {}\nusemtl {}\n",
-                   mesh.positions.size(), mesh.triangles.size(), mtl_name, material.name);
+    fmt::format_to(std::back_inserter(out),
+                   "# written by tdf: {} vertices, {} faces\nmtllib {}\nusemtl {}\n",
+                   mesh.positions.size(),
+                   mesh.triangles.size(),
+                   mtl_name,
+                   material.name);
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
         const Vec3f p = mesh.positions[i];
         if (mesh.has_colors()) {
             const Vec3f c = mesh.colors[i];
-            fmt::format_to(std::back_inserter(out), "v {:.9g} {:.9g} {:.9g} {:.6g} {:.6g} {:.6g}\n", p.x, p.y, p.z,
-                           c.x, c.y, c.z);
+            fmt::format_to(std::back_inserter(out),
+                           "v {:.9g} {:.9g} {:.9g} {:.6g} {:.6g} {:.6g}\n",
+                           p.x,
+                           p.y,
+                           p.z,
+                           c.x,
+                           c.y,
+                           c.z);
         } else {
             fmt::format_to(std::back_inserter(out), "v {:.9g} {:.9g} {:.9g}\n", p.x, p.y, p.z);
         }
     }
     if (mesh.has_uvs())
-        for (const Vec2f& t : mesh.uvs) fmt::format_to(std::back_inserter(out), "vt {:.9g} {:.9g}\n", t.x, t.y);
+        for (const Vec2f& t : mesh.uvs)
+            fmt::format_to(std::back_inserter(out), "vt {:.9g} {:.9g}\n", t.x, t.y);
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
         const Vec3i& t = mesh.triangles[f];
         if (mesh.has_uvs()) {
             const Vec3i& u = mesh.uv_triangles[f];
-            fmt::format_to(std::back_inserter(out), "f {}/{} {}/{} {}/{}\n", t.x + 1, u.x + 1, t.y + 1, u.y + 1,
-                           t.z + 1, u.z + 1);
+            fmt::format_to(std::back_inserter(out),
+                           "f {}/{} {}/{} {}/{}\n",
+                           t.x + 1,
+                           u.x + 1,
+                           t.y + 1,
+                           u.y + 1,
+                           t.z + 1,
+                           u.z + 1);
         } else {
             fmt::format_to(std::back_inserter(out), "f {} {} {}\n", t.x + 1, t.y + 1, t.z + 1);
         }
@@ -107,9 +123,11 @@ std::string encode_png(const Image& image, const std::string& near_path) {
 
 }  // namespace
 
-void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* albedo, const Image* normal_map) {
+void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* albedo,
+               const Image* normal_map) {
     check_writable_mesh(mesh, path);
-    const bool has_tangents = mesh.tangent_triangles.size() == mesh.triangles.size() && !mesh.tangents.empty();
+    const bool has_tangents =
+        mesh.tangent_triangles.size() == mesh.triangles.size() && !mesh.tangents.empty();
     const bool has_normals = mesh.normals.size() == mesh.positions.size();
 
     // One glTF vertex per distinct (position, uv, tangent) corner.
@@ -123,7 +141,8 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* a
             const int p = mesh.triangles[f][k];
             const int t = mesh.has_uvs() ? mesh.uv_triangles[f][k] : -1;
             const int g = has_tangents ? mesh.tangent_triangles[f][k] : -1;
-            const auto [it, inserted] = vertex_ids.emplace(std::make_tuple(p, t, g), std::uint32_t(vertex_ids.size()));
+            const auto [it, inserted] =
+                vertex_ids.emplace(std::make_tuple(p, t, g), std::uint32_t(vertex_ids.size()));
             indices.push_back(it->second);
             if (!inserted) continue;
             const Vec3f position = mesh.positions[std::size_t(p)];
@@ -162,12 +181,15 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* a
     };
     const auto add_floats = [&](const std::vector<float>& values, const char* type, int components) {
         const std::size_t view = add_view(bin.append(values), values.size() * sizeof(float), 34962);
-        accessors.push_back({{"bufferView", view}, {"componentType", 5126}, {"count", values.size() / std::size_t(components)},
+        accessors.push_back({{"bufferView", view},
+                             {"componentType", 5126},
+                             {"count", values.size() / std::size_t(components)},
                              {"type", type}});
         return accessors.size() - 1;
     };
     const std::size_t index_view = add_view(bin.append(indices), indices.size() * 4, 34963);
-    accessors.push_back({{"bufferView", index_view}, {"componentType", 5125}, {"count", indices.size()}, {"type", "SCALAR"}});
+    accessors.push_back(
+        {{"bufferView", index_view}, {"componentType", 5125}, {"count", indices.size()}, {"type", "SCALAR"}});
     attributes["POSITION"] = add_floats(positions, "VEC3", 3);
     accessors[attributes["POSITION"].get<std::size_t>()]["min"] = {lower.x, lower.y, lower.z};
     accessors[attributes["POSITION"].get<std::size_t>()]["max"] = {upper.x, upper.y, upper.z};
@@ -197,18 +219,20 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* a
                 material[slot] = info;
         }
         material["pbrMetallicRoughness"] = pbr;
-        Json gltf = {{"asset", {{"version", "2.0"}, {"generator", "tdf"}}},
-                     {"scene", 0},
-                     {"scenes", Json::array({{{"nodes", {0}}}})},
-                     {"nodes", Json::array({{{"mesh", 0}}})},
-                     {"meshes", Json::array({{{"primitives", Json::array({{{"attributes", attributes},
-                                                                          {"indices", 0},
-                                                                          {"material", 0},
-                                                                          {"mode", 4}}})}}})},
-                     {"materials", Json::array({material})},
-                     {"accessors", accessors},
-                     {"bufferViews", views},
-                     {"buffers", Json::array({{{"byteLength", bin.bytes().size()}}})}};
+        Json gltf = {
+            {"asset", {{"version", "2.0"}, {"generator", "tdf"}}},
+            {"scene", 0},
+            {"scenes", Json::array({{{"nodes", {0}}}})},
+            {"nodes", Json::array({{{"mesh", 0}}})},
+            {"meshes",
+             Json::array(
+                 {{{"primitives",
+                    Json::array(
+                        {{{"attributes", attributes}, {"indices", 0}, {"material", 0}, {"mode", 4}}})}}})},
+            {"materials", Json::array({material})},
+            {"accessors", accessors},
+            {"bufferViews", views},
+            {"buffers", Json::array({{{"byteLength", bin.bytes().size()}}})}};
         if (!images.empty()) {
             gltf["images"] = images;
             gltf["textures"] = textures;

@@ -2,11 +2,10 @@
 // error must name the file and the element. Vertex colours may be uchar (/255), ushort (/65535)
 // or float; UVs may be per vertex (s t, u v, texture_u texture_v) or per face corner (MeshLab's
 // `property list uchar float texcoord`). Polygons are fanned from their first corner like OBJ.
-#include <tdf/mesh/mesh_io.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
+#include <tdf/mesh/mesh_io.h>
 
 #include <charconv>
 #include <cmath>
@@ -41,11 +40,22 @@ struct PlyElement {
 };
 
 bool parse_type(const std::string& name, PlyType& type) {
-    static const std::pair<const char*, PlyType> kTypes[] = {
-        {"char", PlyType::Int8},     {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},    {"uint8", PlyType::UInt8},
-        {"short", PlyType::Int16},   {"int16", PlyType::Int16},     {"ushort", PlyType::UInt16},  {"uint16", PlyType::UInt16},
-        {"int", PlyType::Int32},     {"int32", PlyType::Int32},     {"uint", PlyType::UInt32},    {"uint32", PlyType::UInt32},
-        {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64}, {"float64", PlyType::Float64}};
+    static const std::pair<const char*, PlyType> kTypes[] = {{"char", PlyType::Int8},
+                                                             {"int8", PlyType::Int8},
+                                                             {"uchar", PlyType::UInt8},
+                                                             {"uint8", PlyType::UInt8},
+                                                             {"short", PlyType::Int16},
+                                                             {"int16", PlyType::Int16},
+                                                             {"ushort", PlyType::UInt16},
+                                                             {"uint16", PlyType::UInt16},
+                                                             {"int", PlyType::Int32},
+                                                             {"int32", PlyType::Int32},
+                                                             {"uint", PlyType::UInt32},
+                                                             {"uint32", PlyType::UInt32},
+                                                             {"float", PlyType::Float32},
+                                                             {"float32", PlyType::Float32},
+                                                             {"double", PlyType::Float64},
+                                                             {"float64", PlyType::Float64}};
     for (const auto& [n, t] : kTypes)
         if (name == n) {
             type = t;
@@ -56,10 +66,18 @@ bool parse_type(const std::string& name, PlyType& type) {
 
 std::size_t type_size(PlyType t) {
     switch (t) {
-        case PlyType::Int8: case PlyType::UInt8: return 1;
-        case PlyType::Int16: case PlyType::UInt16: return 2;
-        case PlyType::Int32: case PlyType::UInt32: case PlyType::Float32: return 4;
-        case PlyType::Float64: return 8;
+        case PlyType::Int8:
+        case PlyType::UInt8:
+            return 1;
+        case PlyType::Int16:
+        case PlyType::UInt16:
+            return 2;
+        case PlyType::Int32:
+        case PlyType::UInt32:
+        case PlyType::Float32:
+            return 4;
+        case PlyType::Float64:
+            return 8;
     }
     return 4;
 }
@@ -81,14 +99,22 @@ public:
         if (m_format == PlyFormat::BinaryBig)
             for (std::size_t i = 0; i < size / 2; ++i) std::swap(bytes[i], bytes[size - 1 - i]);
         switch (type) {
-            case PlyType::Int8: return double(std::int8_t(bytes[0]));
-            case PlyType::UInt8: return double(bytes[0]);
-            case PlyType::Int16: return double(load<std::int16_t>(bytes));
-            case PlyType::UInt16: return double(load<std::uint16_t>(bytes));
-            case PlyType::Int32: return double(load<std::int32_t>(bytes));
-            case PlyType::UInt32: return double(load<std::uint32_t>(bytes));
-            case PlyType::Float32: return double(load<float>(bytes));
-            case PlyType::Float64: return load<double>(bytes);
+            case PlyType::Int8:
+                return double(std::int8_t(bytes[0]));
+            case PlyType::UInt8:
+                return double(bytes[0]);
+            case PlyType::Int16:
+                return double(load<std::int16_t>(bytes));
+            case PlyType::UInt16:
+                return double(load<std::uint16_t>(bytes));
+            case PlyType::Int32:
+                return double(load<std::int32_t>(bytes));
+            case PlyType::UInt32:
+                return double(load<std::uint32_t>(bytes));
+            case PlyType::Float32:
+                return double(load<float>(bytes));
+            case PlyType::Float64:
+                return load<double>(bytes);
         }
         return 0.0;
     }
@@ -108,7 +134,10 @@ private:
         double value = 0;
         const auto result = std::from_chars(m_data.data() + begin, m_data.data() + m_pos, value);
         if (result.ec != std::errc() || result.ptr != m_data.data() + m_pos)
-            throw_error("{}: {} {} has '{}', which is not a number", m_path, where, index,
+            throw_error("{}: {} {} has '{}', which is not a number",
+                        m_path,
+                        where,
+                        index,
                         m_data.substr(begin, std::min<std::size_t>(m_pos - begin, 32)));
         return value;
     }
@@ -131,7 +160,8 @@ int find_any(const PlyElement& e, std::initializer_list<const char*> names) {
 TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
     const std::string data = read_text_file(path);
     // Header: lines up to "end_header".
-    if (data.compare(0, 3, "ply") != 0) throw_error("{}: not a PLY file (it does not start with 'ply')", path);
+    if (data.compare(0, 3, "ply") != 0)
+        throw_error("{}: not a PLY file (it does not start with 'ply')", path);
     const std::size_t header_end = data.find("end_header");
     if (header_end == std::string::npos) throw_error("{}: PLY header has no 'end_header'", path);
     std::size_t body = data.find('\n', header_end);
@@ -151,16 +181,30 @@ TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
         if (keyword == "format") {
             std::string name;
             words >> name;
-            if (name == "ascii") format = PlyFormat::Ascii;
-            else if (name == "binary_little_endian") format = PlyFormat::BinaryLittle;
-            else if (name == "binary_big_endian") format = PlyFormat::BinaryBig;
-            else throw_error("{}:{}: unknown PLY format '{}'", path, line_number, name);
+            if (name == "ascii")
+                format = PlyFormat::Ascii;
+            else if (name == "binary_little_endian")
+                format = PlyFormat::BinaryLittle;
+            else if (name == "binary_big_endian")
+                format = PlyFormat::BinaryBig;
+            else
+                throw_error("{}:{}: unknown PLY format '{}'", path, line_number, name);
             have_format = true;
         } else if (keyword == "element") {
             PlyElement e;
             long long count = -1;
             words >> e.name >> count;
-            if (e.name.empty() || count < 0) throw_error("{}:{}: malformed element line '{}'", path, line_number, line);
+            if (e.name.empty() || count < 0)
+                throw_error("{}:{}: malformed element line '{}'", path, line_number, line);
+            // Every item takes at least one byte: a larger count is a corrupt header, not a
+            // reason to reserve gigabytes.
+            if (std::size_t(count) > data.size())
+                throw_error("{}:{}: element '{}' declares {} items but the file has only {} bytes",
+                            path,
+                            line_number,
+                            e.name,
+                            count,
+                            data.size());
             e.count = std::size_t(count);
             elements.push_back(e);
         } else if (keyword == "property") {
@@ -173,10 +217,12 @@ TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
                 words >> count_type >> item_type >> p.name;
                 p.is_list = true;
                 if (!parse_type(count_type, p.count_type) || !parse_type(item_type, p.type))
-                    throw_error("{}:{}: unknown PLY list types '{} {}'", path, line_number, count_type, item_type);
+                    throw_error(
+                        "{}:{}: unknown PLY list types '{} {}'", path, line_number, count_type, item_type);
             } else {
                 words >> p.name;
-                if (!parse_type(type, p.type)) throw_error("{}:{}: unknown PLY type '{}'", path, line_number, type);
+                if (!parse_type(type, p.type))
+                    throw_error("{}:{}: unknown PLY type '{}'", path, line_number, type);
             }
             if (p.name.empty()) throw_error("{}:{}: property without a name", path, line_number);
             elements.back().properties.push_back(p);
@@ -234,14 +280,18 @@ TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
                     continue;
                 }
                 const double count = reader.read(prop.count_type, where, item);
-                if (!(count >= 0 && count <= 1e6)) throw_error("{}: {} {} has a list of {} items", path, where, item, count);
+                if (!(count >= 0 && count <= 1e6))
+                    throw_error("{}: {} {} has a list of {} items", path, where, item, count);
                 if (int(p) == indices) polygon.assign(std::size_t(count), 0);
                 if (int(p) == texcoords) polygon_uvs.assign(std::size_t(count), 0.0);
                 for (std::size_t k = 0; k < std::size_t(count); ++k) {
                     const double value = reader.read(prop.type, where, item);
                     if (int(p) == indices) {
                         if (value < 0 || value >= double(mesh.positions.size()) || value != std::floor(value))
-                            throw_error("{}: face {} uses vertex {} but the file has {} vertices", path, item, value,
+                            throw_error("{}: face {} uses vertex {} but the file has {} vertices",
+                                        path,
+                                        item,
+                                        value,
                                         mesh.positions.size());
                         polygon[k] = int(value);
                     }
@@ -249,22 +299,32 @@ TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
                 }
             }
             if (is_vertex) {
-                mesh.positions.emplace_back(float(values[std::size_t(x)]), float(values[std::size_t(y)]), float(values[std::size_t(z)]));
+                mesh.positions.emplace_back(float(values[std::size_t(x)]),
+                                            float(values[std::size_t(y)]),
+                                            float(values[std::size_t(z)]));
                 if (r >= 0)
-                    mesh.colors.emplace_back(float(values[std::size_t(r)] * colour_scale(r)), float(values[std::size_t(g)] * colour_scale(g)),
+                    mesh.colors.emplace_back(float(values[std::size_t(r)] * colour_scale(r)),
+                                             float(values[std::size_t(g)] * colour_scale(g)),
                                              float(values[std::size_t(b)] * colour_scale(b)));
-                if (u >= 0) vertex_uvs.emplace_back(float(values[std::size_t(u)]), float(values[std::size_t(v)]));
+                if (u >= 0)
+                    vertex_uvs.emplace_back(float(values[std::size_t(u)]), float(values[std::size_t(v)]));
             } else if (is_face) {
-                if (polygon.size() < 3) throw_error("{}: face {} has {} corners, at least 3 needed", path, item, polygon.size());
+                if (polygon.size() < 3)
+                    throw_error("{}: face {} has {} corners, at least 3 needed", path, item, polygon.size());
                 if (corner_uvs && polygon_uvs.size() != 2 * polygon.size())
-                    throw_error("{}: face {} has {} texcoord values for {} corners", path, item, polygon_uvs.size(), polygon.size());
+                    throw_error("{}: face {} has {} texcoord values for {} corners",
+                                path,
+                                item,
+                                polygon_uvs.size(),
+                                polygon.size());
                 const int first_uv = int(mesh.uvs.size());
                 if (corner_uvs)
                     for (std::size_t k = 0; k < polygon.size(); ++k)
                         mesh.uvs.emplace_back(float(polygon_uvs[2 * k]), float(polygon_uvs[2 * k + 1]));
                 for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
                     mesh.triangles.push_back({polygon[0], polygon[k], polygon[k + 1]});
-                    if (corner_uvs) mesh.uv_triangles.push_back({first_uv, first_uv + int(k), first_uv + int(k) + 1});
+                    if (corner_uvs)
+                        mesh.uv_triangles.push_back({first_uv, first_uv + int(k), first_uv + int(k) + 1});
                 }
             }
         }

@@ -1,16 +1,16 @@
+#include <gtest/gtest.h>
 #include <tdf/atlas/chart_packing.h>
 #include <tdf/atlas/uv_atlas.h>
 #include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/core/rng.h>
 #include <tdf/mesh/mesh_io.h>
-
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 
@@ -20,7 +20,8 @@ namespace {
 TriangleMesh plane(int n, int m, float w, float h) {
     TriangleMesh mesh;
     for (int j = 0; j <= m; ++j)
-        for (int i = 0; i <= n; ++i) mesh.positions.emplace_back(w * float(i) / float(n), h * float(j) / float(m), 0.0f);
+        for (int i = 0; i <= n; ++i)
+            mesh.positions.emplace_back(w * float(i) / float(n), h * float(j) / float(m), 0.0f);
     for (int j = 0; j < m; ++j)
         for (int i = 0; i < n; ++i) {
             const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
@@ -33,8 +34,10 @@ TriangleMesh plane(int n, int m, float w, float h) {
 // A unit cube with shared corner vertices, outward-facing triangles.
 TriangleMesh cube() {
     TriangleMesh mesh;
-    for (int i = 0; i < 8; ++i) mesh.positions.emplace_back(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1));
-    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (int i = 0; i < 8; ++i)
+        mesh.positions.emplace_back(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1));
+    const int quads[6][4] = {
+        {0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     for (const auto& q : quads) {
         mesh.triangles.push_back({q[0], q[1], q[2]});
         mesh.triangles.push_back({q[0], q[2], q[3]});
@@ -48,11 +51,13 @@ TriangleMesh torus(int n, int m, float r) {
     for (int j = 0; j < m; ++j)
         for (int i = 0; i < n; ++i) {
             const float u = 2 * kPi * float(i) / float(n), v = 2 * kPi * float(j) / float(m);
-            mesh.positions.emplace_back((1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u), r * std::sin(v));
+            mesh.positions.emplace_back(
+                (1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u), r * std::sin(v));
         }
     for (int j = 0; j < m; ++j)
         for (int i = 0; i < n; ++i) {
-            const int a = j * n + i, b = j * n + (i + 1) % n, c = ((j + 1) % m) * n + (i + 1) % n, d = ((j + 1) % m) * n + i;
+            const int a = j * n + i, b = j * n + (i + 1) % n, c = ((j + 1) % m) * n + (i + 1) % n,
+                      d = ((j + 1) % m) * n + i;
             mesh.triangles.push_back({a, b, c});
             mesh.triangles.push_back({a, c, d});
         }
@@ -78,8 +83,10 @@ void expect_isometric(const TriangleMesh& mesh, double tolerance) {
     double lo = 1e300, hi = 0;
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
         for (int k = 0; k < 3; ++k) {
-            const Vec3f d3 = mesh.positions[std::size_t(mesh.triangles[f][(k + 1) % 3])] - mesh.positions[std::size_t(mesh.triangles[f][k])];
-            const Vec2f d2 = mesh.uvs[std::size_t(mesh.uv_triangles[f][(k + 1) % 3])] - mesh.uvs[std::size_t(mesh.uv_triangles[f][k])];
+            const Vec3f d3 = mesh.positions[std::size_t(mesh.triangles[f][(k + 1) % 3])] -
+                             mesh.positions[std::size_t(mesh.triangles[f][k])];
+            const Vec2f d2 = mesh.uvs[std::size_t(mesh.uv_triangles[f][(k + 1) % 3])] -
+                             mesh.uvs[std::size_t(mesh.uv_triangles[f][k])];
             const double ratio = std::hypot(d2.x, d2.y) / double(length(d3));
             lo = std::min(lo, ratio);
             hi = std::max(hi, ratio);
@@ -142,6 +149,9 @@ TEST(UvAtlas, SurvivesDegenerateDuplicateAndNonManifoldInput) {
     mesh.triangles.push_back({0, 1, n + 2});
     mesh.positions.emplace_back(5.0f, 5.0f, 5.0f);
     mesh.triangles.push_back({n + 3, n + 3, n + 3});
+    // A needle: two corners closer than the weld distance, yet a non-zero area.
+    mesh.positions.push_back(mesh.positions[0] + Vec3f{1e-8f, 0.0f, 0.0f});
+    mesh.triangles.push_back({0, n + 4, n + 1});
     // A duplicated face with the opposite winding (a two-sided sheet).
     mesh.triangles.push_back({mesh.triangles[0].x, mesh.triangles[0].z, mesh.triangles[0].y});
     AtlasReport report;
@@ -156,6 +166,20 @@ TEST(UvAtlas, SurvivesDegenerateDuplicateAndNonManifoldInput) {
         }
 }
 
+TEST(UvAtlas, RandomTriangleSoupWithSharedAndFlippedFacesStaysValid) {
+    // Random triangles over a small vertex pool: shared vertices, random windings, slivers,
+    // non-manifold fans and intersecting faces all at once.
+    Rng rng(11);
+    TriangleMesh mesh;
+    for (int i = 0; i < 60; ++i) mesh.positions.emplace_back(rng.uniform(), rng.uniform(), rng.uniform());
+    for (int i = 0; i < 120; ++i)
+        mesh.triangles.push_back({rng.uniform_int(0, 60), rng.uniform_int(0, 60), rng.uniform_int(0, 60)});
+    AtlasReport report;
+    build_atlas(mesh, unwrap(1024), &report);
+    expect_valid_layout(report, "soup");
+    EXPECT_EQ(report.faces, 120u);
+}
+
 TEST(UvAtlas, KeepsExistingUvsUnlessAskedAndRejectsBadOptions) {
     TriangleMesh mesh = plane(2, 2, 1.0f, 1.0f);
     for (const Vec3f& p : mesh.positions) mesh.uvs.emplace_back(p.x * 0.5f, p.y * 0.5f);
@@ -168,7 +192,9 @@ TEST(UvAtlas, KeepsExistingUvsUnlessAskedAndRejectsBadOptions) {
     EXPECT_FLOAT_EQ(kept.uvs[4].x, 0.25f);
     EXPECT_NEAR(report.utilisation, 0.25, 0.01);
 
-    for (const auto& bad : {AtlasOptions{8}, AtlasOptions{1024, -1}, AtlasOptions{1024, 4, true, 70.0f, 95.0f},
+    for (const auto& bad : {AtlasOptions{8},
+                            AtlasOptions{1024, -1},
+                            AtlasOptions{1024, 4, true, 70.0f, 95.0f},
                             AtlasOptions{1024, 4, true, 70.0f, 70.0f, 0.5f}})
         EXPECT_THROW(build_atlas(mesh, bad), Error);
 }
@@ -212,8 +238,10 @@ TEST(UvAtlas, PackerKeepsGutterBetweenCharts) {
     for (const PackChart& c : charts) {
         std::array<float, 4> b = {1e9f, 1e9f, -1e9f, -1e9f};
         for (const Vec2f uv : c.uvs) {
-            b[0] = std::min(b[0], uv.x * size), b[1] = std::min(b[1], uv.y * size);
-            b[2] = std::max(b[2], uv.x * size), b[3] = std::max(b[3], uv.y * size);
+            b[0] = std::min(b[0], uv.x * size);
+            b[1] = std::min(b[1], uv.y * size);
+            b[2] = std::max(b[2], uv.x * size);
+            b[3] = std::max(b[3], uv.y * size);
             EXPECT_GE(uv.x, 0.0f);
             EXPECT_LE(uv.y, 1.0f);
         }
@@ -224,8 +252,10 @@ TEST(UvAtlas, PackerKeepsGutterBetweenCharts) {
     for (std::size_t i = 0; i < boxes.size(); ++i)
         for (std::size_t j = i + 1; j < boxes.size(); ++j) {
             // Texels touched: [floor(min), ceil(max)); the gap between touched texel ranges >= gutter.
-            const float gap_x = std::max(std::floor(boxes[j][0]) - std::ceil(boxes[i][2]), std::floor(boxes[i][0]) - std::ceil(boxes[j][2]));
-            const float gap_y = std::max(std::floor(boxes[j][1]) - std::ceil(boxes[i][3]), std::floor(boxes[i][1]) - std::ceil(boxes[j][3]));
+            const float gap_x = std::max(std::floor(boxes[j][0]) - std::ceil(boxes[i][2]),
+                                         std::floor(boxes[i][0]) - std::ceil(boxes[j][2]));
+            const float gap_y = std::max(std::floor(boxes[j][1]) - std::ceil(boxes[i][3]),
+                                         std::floor(boxes[i][1]) - std::ceil(boxes[j][3]));
             EXPECT_GE(std::max(gap_x, gap_y), float(gutter)) << i << " vs " << j;
         }
 }
@@ -233,7 +263,8 @@ TEST(UvAtlas, PackerKeepsGutterBetweenCharts) {
 TEST(UvAtlas, SharedMeshesReunwrapWithoutOverlapsAndBeatXatlasUtilisation) {
     TDF_REQUIRE_SHARED_DATA("meshes");
     std::size_t tested = 0;
-    for (const auto& entry : std::filesystem::recursive_directory_iterator(test::shared_data_dir() + "/meshes")) {
+    for (const auto& entry :
+         std::filesystem::recursive_directory_iterator(test::shared_data_dir() + "/meshes")) {
         const std::string ext = entry.path().extension().string();
         if (ext != ".obj" && ext != ".gltf" && ext != ".glb" && ext != ".ply") continue;
         TriangleMesh mesh;

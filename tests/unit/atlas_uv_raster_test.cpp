@@ -1,8 +1,7 @@
+#include <gtest/gtest.h>
 #include <tdf/atlas/gutter.h>
 #include <tdf/atlas/uv_raster.h>
 #include <tdf/core/error.h>
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 
@@ -37,7 +36,8 @@ TEST(UvRaster, FullQuadCoversEveryTexelOnceWithExactBarycentrics) {
             EXPECT_NEAR(w.x + w.y + w.z, 1.0f, 1e-6f);
             // Interpolated position = UV = texel centre, with row 0 at the top (v near 1).
             Vec3f p{0, 0, 0};
-            for (int k = 0; k < 3; ++k) p += mesh.positions[std::size_t(mesh.triangles[std::size_t(f)][k])] * w[k];
+            for (int k = 0; k < 3; ++k)
+                p += mesh.positions[std::size_t(mesh.triangles[std::size_t(f)][k])] * w[k];
             EXPECT_NEAR(p.x, (j + 0.5f) / size, 1e-5f);
             EXPECT_NEAR(p.y, 1.0f - (i + 0.5f) / size, 1e-5f);
         }
@@ -68,6 +68,26 @@ TEST(UvRaster, InterpolatesVertexColoursAndSamplesBilinear) {
     sample_bilinear(image, Vec2f{0.3f, 0.7f}, rgb);
     EXPECT_NEAR(rgb[0], 0.3f, 1e-5f);
     EXPECT_NEAR(rgb[1], 0.7f, 1e-5f);
+}
+
+TEST(UvRaster, PartialTexelsGoToTheTriangleTouchingThem) {
+    // A triangle inside texel (row 1, column 2) of a 4x4 raster that misses the texel centre.
+    TriangleMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    mesh.triangles = {{0, 1, 2}};
+    mesh.uvs = {{0.51f, 0.51f}, {0.6f, 0.51f}, {0.51f, 0.6f}};
+    mesh.uv_triangles = mesh.triangles;
+    UvRaster raster = rasterize_uv(mesh, 4);
+    EXPECT_EQ(raster.covered_count(), 0u);
+    add_partial_texels(mesh, raster);
+    EXPECT_EQ(raster.covered_count(), 1u);
+    const std::size_t t = 1 * 4 + 2;
+    ASSERT_EQ(raster.triangle[t], 0);
+    const Vec3f w = raster.barycentric[t];
+    EXPECT_NEAR(w.x + w.y + w.z, 1.0f, 1e-6f);
+    // The centre (u, v) = (0.625, 0.625) is nearest to the hypotenuse's midpoint.
+    EXPECT_NEAR(w.y, 0.5f, 1e-5f);
+    EXPECT_NEAR(w.z, 0.5f, 1e-5f);
 }
 
 TEST(UvRaster, RejectsMeshWithoutUvsAndBadSize) {

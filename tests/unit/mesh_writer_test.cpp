@@ -1,16 +1,15 @@
+#include <gtest/gtest.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/mesh/mesh_io.h>
 #include <tdf/mesh/mesh_writer.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 

@@ -9,15 +9,16 @@
 namespace tdf {
 
 /// A `size` x `size` RGB map of the mesh's per-vertex colours, interpolated barycentrically at
-/// every texel centre its UV layout covers (rasterize_uv), then dilated to fill the rest.
+/// every texel centre its UV layout covers (rasterize_uv) and at the nearest surface point for
+/// texels the layout only partly covers (add_partial_texels), then dilated to fill the rest.
 /// Throws tdf::Error when the mesh has no UVs or no vertex colours.
 Image bake_vertex_colors(const TriangleMesh& mesh, int size);
 
-/// Re-bakes `texture`, laid out by `source`'s UVs, onto `target`'s UVs: each covered texel of the
-/// target takes the bilinear sample of `texture` at the same surface point (same face, same
-/// barycentrics) through the source UVs. `source` and `target` must share faces (same count and
-/// position indices, as build_atlas guarantees). Output has the texture's channel count.
-/// Throws tdf::Error when the faces differ, either mesh lacks UVs, or the texture is empty.
+/// Re-bakes `texture`, laid out by `source`'s UVs, onto `target`'s UVs: each covered (or partly
+/// covered) texel of the target takes the bilinear sample of `texture` at the same surface point (same face,
+/// same barycentrics) through the source UVs. `source` and `target` must share faces (same count and position
+/// indices, as build_atlas guarantees). Output has the texture's channel count. Throws tdf::Error when the
+/// faces differ, either mesh lacks UVs, or the texture is empty.
 Image rebake_texture(const TriangleMesh& source, const Image& texture, const TriangleMesh& target, int size);
 
 }  // namespace tdf

@@ -7,7 +7,8 @@
 /// mean of its filled neighbours, edge neighbours weighted 2 and diagonal ones 1; the newly
 /// filled texels join the region for the next pass. Passes read only the previous pass's
 /// values (double-buffered), so the result does not depend on the visiting order or on threads.
-/// Cost O(texels filled), about 10 ms at 1024^2. Values stay in float (no 8-bit round trip).
+/// Cost O(texels filled): 87 ms of CPU to fill 700k empty texels of a 1024^2 RGB map. Values
+/// stay in float (no 8-bit round trip).
 #include <tdf/core/image.h>
 
 #include <vector>

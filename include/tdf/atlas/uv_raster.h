@@ -35,6 +35,13 @@ struct UvRaster {
 /// Throws tdf::Error when the mesh has no UVs or `size` is not in [1, 16384].
 UvRaster rasterize_uv(const TriangleMesh& mesh, int size);
 
+/// Extends `raster` to the texels that a UV triangle overlaps without covering their centre
+/// (chart borders, and charts smaller than a texel), so bakes put true surface values there
+/// instead of leaving them to gutter dilation: each such texel, if still empty, goes to the
+/// lowest-index face touching it, with the barycentrics of the point of that face nearest to the
+/// texel centre (on its border). Zero-area UV triangles are skipped. Deterministic.
+void add_partial_texels(const TriangleMesh& mesh, UvRaster& raster);
+
 /// Interpolates a per-vertex attribute (indexed like `mesh.positions`) at every covered texel
 /// into a `size` x `size` image with 3 channels; empty texels get `background`.
 Image interpolate_vertex_attribute(const TriangleMesh& mesh, const UvRaster& raster,
