@@ -88,6 +88,17 @@ void run_optimize(const OptimizeOptions& options) {
     ensure_folder(options.output_dir);
 
     std::unique_ptr<SceneAssets> assets = load_scene_assets(description);
+    {
+        // The reference's cameras (radius 1.25-2.25, 0.15-unit patches, spec 2.3-2.4) assume a mesh
+        // of about unit size centred at the origin; its base meshes are (training uses raw coordinates).
+        const Bounds3 bounds = compute_bounds(assets->mesh);
+        const Vec3f e = bounds.extent();
+        const float largest = std::max(e.x, std::max(e.y, e.z));
+        if (largest > 4.0f || largest < 0.5f || length(bounds.center()) > 0.5f * largest)
+            log_warning("{}: the mesh spans {:.3g} units around ({:.3g}, {:.3g}, {:.3g}); the training cameras "
+                        "expect about [-1, 1]: set \"normalize\": true in the scene", description.mesh, largest,
+                        bounds.center().x, bounds.center().y, bounds.center().z);
+    }
     TrainingTarget target;
     target.mesh = &assets->mesh;
     target.scene = assets->scene.get();

@@ -8,6 +8,9 @@ namespace tdf {
 BakedMaps bake_field(const TextureField& field, const TriangleMesh& mesh, int size, int gutter) {
     BakedMaps maps;
     maps.raster = rasterize_uv(mesh, size);
+    // Texels a chart only partly covers get true surface values, not dilated ones: at seams
+    // bilinear and mip lookups read them (spec 12.5).
+    add_partial_texels(mesh, maps.raster);
     const UvRaster& raster = maps.raster;
     std::vector<Vec3f> points;
     std::vector<std::size_t> texels;
