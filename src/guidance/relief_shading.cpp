@@ -123,4 +123,23 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
     return result;
 }
 
+double colour_geometry_correlation(const Image& colour, const Image& viewspace_normals, const Image& mask) {
+    const Image low = gaussian_blur_masked(colour, mask, 3.0f);
+    const Image curvature = normal_divergence(viewspace_normals, mask, 1.0f);
+    double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+    std::size_t n = 0;
+    for (std::size_t p = 0; p < colour.pixel_count(); ++p) {
+        if (mask.data()[p] < 1.0f) continue;
+        double a = 0;
+        for (int c = 0; c < 3; ++c) a += (colour.data()[3 * p + std::size_t(c)] - low.data()[3 * p + std::size_t(c)]) / 3.0;
+        const double b = curvature.data()[p];
+        sa += a, sb += b, saa += a * a, sbb += b * b, sab += a * b, ++n;
+    }
+    if (n == 0) return 0.0;
+    const double cov = sab / double(n) - sa / double(n) * sb / double(n);
+    const double va = saa / double(n) - sa / double(n) * sa / double(n);
+    const double vb = sbb / double(n) - sb / double(n) * sb / double(n);
+    return va > 0 && vb > 0 ? cov / std::sqrt(va * vb) : 0.0;
+}
+
 }  // namespace tdf

@@ -56,26 +56,6 @@ Image disc_mask() {
     return mask;
 }
 
-/// Pearson correlation, over pixels with mask 1, between the high frequencies of the colour's
-/// luminance (colour minus its Gaussian blur) and the curvature of the normals.
-double colour_geometry_correlation(const Image& colour, const Image& normals, const Image& mask) {
-    const Image low = gaussian_blur_masked(colour, mask, 3.0f);
-    const Image curvature = normal_divergence(normals, mask, 1.0f);
-    double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-    int n = 0;
-    for (int y = 0; y < kSize; ++y)
-        for (int x = 0; x < kSize; ++x) {
-            if (mask.at(x, y, 0) < 1.0f) continue;
-            double a = 0;
-            for (int c = 0; c < 3; ++c) a += (colour.at(x, y, c) - low.at(x, y, c)) / 3.0;
-            const double b = curvature.at(x, y, 0);
-            sa += a, sb += b, saa += a * a, sbb += b * b, sab += a * b, ++n;
-        }
-    const double cov = sab / n - sa / n * sb / n;
-    const double va = saa / n - sa / n * sa / n, vb = sbb / n - sb / n * sb / n;
-    return va > 0 && vb > 0 ? cov / std::sqrt(va * vb) : 0.0;
-}
-
 TEST(GuidanceReliefShading, DivergenceIsPositiveOnBumpsNegativeInDimples) {
     std::vector<float> h(std::size_t(kSize * kSize), 0.0f);
     for (int y = 0; y < kSize; ++y)

@@ -66,4 +66,10 @@ private:
 /// where a neighbour is background. Units: 1 / pixel.
 Image normal_divergence(const Image& viewspace_normals, const Image& mask, float sigma);
 
+/// Colour-geometry alignment: the Pearson correlation, over pixels with mask 1, between the high
+/// frequencies of the colour's luminance (colour minus its 3-pixel Gaussian blur) and the
+/// curvature of the view-space normals (normal_divergence, sigma 1). Near 0 when colour detail
+/// ignores the relief; positive when ridges are lighter and cavities darker (issue 6's measure).
+double colour_geometry_correlation(const Image& colour, const Image& viewspace_normals, const Image& mask);
+
 }  // namespace tdf

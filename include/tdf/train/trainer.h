@@ -45,9 +45,20 @@ struct QualityReport {
     double albedo_psnr_full = 0;        ///< dB over whole images, white background included
     double albedo_max_error = 0;        ///< largest per-channel absolute error on covered pixels
     double tactile_mean_cosine = 0;     ///< learned vs target view-space normals, patch hits
+    /// Colour-geometry alignment of the learned albedo and normals (colour_geometry_correlation,
+    /// mean over the held-out views): what visual guidance raises (issue 6).
+    double colour_geometry_correlation = 0;
     int views = 0;
     int patches = 0;
     Json to_json() const;
+};
+
+/// The learned field seen from one camera: albedo composited on white, view-space shading
+/// normals (zero off the surface) and the coverage mask, all camera.width x camera.height.
+struct LearnedImages {
+    Image albedo;
+    Image view_normals;
+    Image mask;
 };
 
 /// Per-stage seconds of the iterations so far (README "Measured").
@@ -82,6 +93,11 @@ public:
     /// Albedo PSNR and tactile cosine on views and patches drawn from a stream no training
     /// iteration uses.
     QualityReport evaluate_held_out() const;
+    /// The k-th held-out visual view (no SSAA) and tactile patch camera.
+    Camera held_out_view(int k) const;
+    Camera held_out_patch(int k) const;
+    /// Renders the current field from `camera` (spec 3.1-3.5 training shading).
+    LearnedImages render_learned(const Camera& camera) const;
     const StageTimes& stage_times() const { return m_times; }
 
 private:
