@@ -60,20 +60,15 @@ struct BatchPoints {
     alignas(32) float coord[3][kBatch];
 };
 
-TDF_MULTIVERSION
-void to_soa(const Vec3f* x, std::size_t count, BatchPoints& p) {
-    for (std::size_t i = 0; i < count; ++i)
-        for (int d = 0; d < 3; ++d) p.coord[d][i] = HashGrid::sanitize_coordinate(x[i][d]);
-}
-
 // The batch version of HashGrid::corners (same arithmetic, point by point identical).
 TDF_MULTIVERSION
-void batch_corners(const HashGridLevel& l, const BatchPoints& p, std::size_t count, BatchCorners& out) {
+void batch_corners(const HashGridLevel& l, const GridPointArrays& p, std::size_t first, std::size_t count,
+                   BatchCorners& out) {
     alignas(32) std::uint32_t g[3][kBatch];
     alignas(32) float w1[3][kBatch];
     for (int d = 0; d < 3; ++d) {
         for (std::size_t i = 0; i < count; ++i) {
-            const float pos = l.scale * p.coord[d][i] + 0.5f;
+            const float pos = l.scale * p.coord[d][first + i] + 0.5f;
             int cell = int(pos);
             cell -= int(pos < float(cell));
             g[d][i] = std::uint32_t(cell);
@@ -95,18 +90,21 @@ void batch_corners(const HashGridLevel& l, const BatchPoints& p, std::size_t cou
                 index[i] = ((g[0][i] + ox) ^ (hy[i] + oy) ^ (hz[i] + oz)) & mask;
         }
     } else {
-        const std::uint32_t r = l.resolution, r2 = l.resolution * l.resolution;
+        const std::uint32_t r = l.resolution, r2 = l.resolution * l.resolution, size = l.table_size;
         for (int c = 0; c < 8; ++c) {
             const std::uint32_t ox = std::uint32_t(c & 1), oy = std::uint32_t((c >> 1) & 1),
                                 oz = std::uint32_t(c >> 2);
             std::uint32_t* index = out.index[c];
-            for (std::size_t i = 0; i < count; ++i)
+            std::uint32_t outside = 0;
+            for (std::size_t i = 0; i < count; ++i) {
                 index[i] = (g[0][i] + ox) + (g[1][i] + oy) * r + (g[2][i] + oz) * r2;
+                outside |= std::uint32_t(index[i] >= size);
+            }
             // The modulo only bites at the +0.5 boundary or for wrapped coordinates: a separate
-            // scalar pass keeps the loop above vectorized.
-            for (std::size_t i = 0; i < count; ++i)
-                if (index[i] >= l.table_size)
-                    index[i] = detail::fast_mod(index[i], l.modulo_magic, l.table_size);
+            // scalar pass, only when needed, keeps the loop above vectorized.
+            if (outside)
+                for (std::size_t i = 0; i < count; ++i)
+                    if (index[i] >= size) index[i] = detail::fast_mod(index[i], l.modulo_magic, size);
         }
     }
     for (int c = 0; c < 8; ++c) {
@@ -123,9 +121,10 @@ void batch_corners(const HashGridLevel& l, const BatchPoints& p, std::size_t cou
 TDF_MULTIVERSION
 void gather_level(const HashGridLevel& l, const float* table, const BatchCorners& bc, std::size_t count,
                   float* f0, float* f1) {
-    // Only hashed tables (256 KiB each, 3.5 MiB together) miss the cache; the dense ones stay
-    // in L2. Corners c and c+1 differ only in x, which the hash multiplies by 1: they nearly
-    // always share a cache line, so prefetching the even corners covers the lines.
+    // Hashed tables (256 KiB each) do not fit L1 and, with other processes on the core, are not
+    // reliably in L2 (measured: the prefetch still pays off level by level). Corners c and c+1
+    // differ only in x, which the hash multiplies by 1: they nearly always share a cache line,
+    // so prefetching the even corners covers the lines.
     if (l.hashed)
         for (int c = 0; c < 8; c += 2)
             for (std::size_t i = 0; i < count; ++i)
@@ -149,38 +148,46 @@ void HashGrid::encode_batch(const float* grid_params, const Vec3f* x, std::size_
     TDF_CHECK_LE(count, kBatch);
     TDF_CHECK_LE(count, stride);
     BatchPoints p;
+    for (std::size_t i = 0; i < count; ++i)
+        for (int d = 0; d < 3; ++d) p.coord[d][i] = sanitize_coordinate(x[i][d]);
+    encode_levels(grid_params, GridPointArrays{{p.coord[0], p.coord[1], p.coord[2]}}, count, features, stride);
+}
+
+void HashGrid::encode_levels(const float* grid_params, const GridPointArrays& x, std::size_t count,
+                             float* features, std::size_t stride) const {
+    TDF_CHECK_LE(count, stride);
     BatchCorners bc;
-    to_soa(x, count, p);
     for (int level = 0; level < level_count(); ++level) {
         const HashGridLevel& l = m_levels[std::size_t(level)];
-        batch_corners(l, p, count, bc);
-        gather_level(l,
-                     grid_params + std::size_t(l.offset) * kFeaturesPerLevel,
-                     bc,
-                     count,
-                     features + std::size_t(2 * level) * stride,
-                     features + std::size_t(2 * level + 1) * stride);
+        const float* table = grid_params + std::size_t(l.offset) * kFeaturesPerLevel;
+        float* f0 = features + std::size_t(2 * level) * stride;
+        float* f1 = features + std::size_t(2 * level + 1) * stride;
+        for (std::size_t b = 0; b < count; b += kBatch) {
+            const std::size_t n = std::min(kBatch, count - b);
+            batch_corners(l, x, b, n, bc);
+            gather_level(l, table, bc, n, f0 + b, f1 + b);
+        }
     }
 }
 
-void HashGrid::accumulate_level_gradient_batch(int level, const Vec3f* x, std::size_t count,
-                                               const float* d_features, float* grid_gradient) const {
-    TDF_CHECK_LE(count, kBatch);
+void HashGrid::accumulate_level_gradient(int level, const GridPointArrays& x, std::size_t count, const float* d0,
+                                         const float* d1, float* grid_gradient) const {
     const HashGridLevel& l = m_levels[std::size_t(level)];
-    BatchPoints p;
-    BatchCorners bc;
-    to_soa(x, count, p);
-    batch_corners(l, p, count, bc);
     float* table = grid_gradient + std::size_t(l.offset) * kFeaturesPerLevel;
-    // Scalar and in point order: corners of different points may share entries, and the
-    // order of the additions must not depend on anything but the point order.
-    for (std::size_t i = 0; i < count; ++i) {
-        const float d0 = d_features[2 * i], d1 = d_features[2 * i + 1];
-        if (d0 == 0.0f && d1 == 0.0f) continue;
-        for (int c = 0; c < 8; ++c) {
-            float* entry = table + std::size_t(bc.index[c][i]) * kFeaturesPerLevel;
-            entry[0] += bc.weight[c][i] * d0;
-            entry[1] += bc.weight[c][i] * d1;
+    BatchCorners bc;
+    for (std::size_t b = 0; b < count; b += kBatch) {
+        const std::size_t n = std::min(kBatch, count - b);
+        batch_corners(l, x, b, n, bc);
+        // Scalar and in point order: corners of different points may share entries, and the
+        // order of the additions must not depend on anything but the point order.
+        for (std::size_t i = 0; i < n; ++i) {
+            const float g0 = d0[b + i], g1 = d1[b + i];
+            if (g0 == 0.0f && g1 == 0.0f) continue;
+            for (int c = 0; c < 8; ++c) {
+                float* entry = table + std::size_t(bc.index[c][i]) * kFeaturesPerLevel;
+                entry[0] += bc.weight[c][i] * g0;
+                entry[1] += bc.weight[c][i] * g1;
+            }
         }
     }
 }

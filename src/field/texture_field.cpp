@@ -4,6 +4,7 @@
 #include <tdf/field/texture_field.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "multiversion_impl.h"
 
@@ -11,10 +12,21 @@ namespace tdf {
 
 namespace {
 
-// Points per backward block: the level-major dL/d(encoding) of one block is 32768 x 32 floats
+// Points per backward block: the feature-major dL/d(encoding) of one block is 32768 x 32 floats
 // (4 MiB), small enough to stay cache-friendly, large enough that the per-level scatter
 // tasks amortize their start.
 constexpr std::size_t kBlockChunks = 32;
+
+// Points encoded level by level in one go (HashGrid::encode_levels), a whole number of chunks:
+// each level's table is read by 2048 points in a row, and the block's encodings (256 KiB) are
+// still in L2 when the heads read them (8192 points made the heads 5x slower: L2 misses).
+constexpr std::size_t kEncodeBlock = 2 * TextureField::kChunk;
+
+// Row stride of feature-major block buffers: one cache line more than the rows, so the 32
+// feature rows that a batch reads or writes together do not all map to the same L1 cache set
+// (power-of-two strides made them evict each other).
+constexpr std::size_t padded_stride(std::size_t points) { return points + 16; }
+constexpr std::size_t kEncodeStride = padded_stride(kEncodeBlock);
 
 constexpr int kHeadRows[3] = {3, 3, 2};
 const char* const kHeadNames[3] = {"albedo", "normal", "label"};
@@ -125,30 +137,44 @@ void build_head_matrix(const float* heads, int features, bool labels, HeadMatrix
     }
 }
 
-// Batch of points, feature-major (the layout HashGrid::encode_batch writes with stride kBatch).
-struct BatchFeatures {
-    alignas(32) float value[kMaxFeatures][kBatch];
-};
+// 8 floats as one value (GCC vector extension): elementwise arithmetic, compiled to one AVX2
+// instruction or two SSE ones, so every lane does the same operations as scalar code.
+typedef float Float8 __attribute__((vector_size(32)));
 
 // Pre-activations or their gradients for a batch, output-major.
 struct BatchOutputs {
     alignas(32) float value[TextureField::kOutputs][kBatch];
 };
 
-// z = W e + b for a batch, 8 points per AVX2 instruction; each point's sum runs in feature order.
+// Feature-major encodings (or their gradients) of a block of points: feature k of point i at
+// `data[k * stride + i]`. T = const float for read-only use.
+template <typename T>
+struct FeatureRows {
+    T* data;
+    std::size_t stride;
+    T* feature(int k, std::size_t first) const { return data + std::size_t(k) * stride + first; }
+};
+using BlockFeatures = FeatureRows<float>;
+using ConstBlockFeatures = FeatureRows<const float>;
+
+// z = W e + b for `count` <= kBatch points starting at `first`, 8 points at a time with the
+// sums of all rows in registers (each point's sum runs in feature order, then the bias). Reads
+// the features up to the next multiple of 8 (finite padding); rows >= m.rows come out 0.
 TDF_MULTIVERSION
-void heads_forward(const HeadMatrix& m, const BatchFeatures& e, int features, std::size_t count,
-                   BatchOutputs& z) {
-    for (int r = 0; r < TextureField::kOutputs; ++r) {
-        float* zr = z.value[r];
-        for (std::size_t i = 0; i < count; ++i) zr[i] = 0.0f;
-        if (r >= m.rows) continue;
+void heads_forward(const HeadMatrix& m, const ConstBlockFeatures& e, std::size_t first, int features,
+                   std::size_t count, BatchOutputs& z) {
+    constexpr int kRows = TextureField::kOutputs;
+    for (std::size_t i = 0; i < count; i += 8) {
+        Float8 acc[kRows] = {};
         for (int k = 0; k < features; ++k) {
-            const float w = m.weight[r][k];
-            const float* ek = e.value[k];
-            for (std::size_t i = 0; i < count; ++i) zr[i] += w * ek[i];
+            Float8 ek;
+            std::memcpy(&ek, e.feature(k, first + i), sizeof ek);
+            for (int r = 0; r < kRows; ++r) acc[r] += m.weight[r][k] * ek;
         }
-        for (std::size_t i = 0; i < count; ++i) zr[i] += m.bias[r];
+        for (int r = 0; r < kRows; ++r) {
+            const Float8 zr = r < m.rows ? acc[r] + m.bias[r] : Float8{};
+            std::memcpy(z.value[r] + i, &zr, sizeof zr);
+        }
     }
 }
 
@@ -188,7 +214,7 @@ inline void activation_backward(const BatchOutputs& z, std::size_t i, const Fiel
 // are combined in a fixed order, so they vectorize and stay deterministic. Entries i >= count
 // of dz must be 0 up to the next multiple of 8 (and e finite there).
 TDF_MULTIVERSION
-void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const BatchFeatures& e,
+void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const ConstBlockFeatures& e, std::size_t first,
                             const BatchOutputs& dz, int features, std::size_t count, float* partial) {
     const std::size_t padded = (count + 7) / 8 * 8;
     auto lane_sum = [](const float* lanes) {
@@ -199,7 +225,7 @@ void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const Bat
         const float* d = dz.value[r];
         float* gw = partial + rows.weight[r];
         for (int k = 0; k < features; ++k) {
-            const float* ek = e.value[k];
+            const float* ek = e.feature(k, first);
             float lanes[8] = {};
             for (std::size_t i = 0; i < padded; i += 8)
                 for (int j = 0; j < 8; ++j) lanes[j] += d[i + std::size_t(j)] * ek[i + std::size_t(j)];
@@ -212,43 +238,128 @@ void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const Bat
     }
 }
 
-// de = W^T dz for a batch, written over `e` (feature-major, no longer needed).
+// de = W^T dz for a batch, written to `d_features` from point `first` on (feature-major), 8
+// points at a time with dz in registers; each sum runs in row order. Writes up to the next
+// multiple of 8 (dz is 0 there). Rows >= m.rows have zero weights and zero dz.
 TDF_MULTIVERSION
 void heads_backward_features(const HeadMatrix& m, const BatchOutputs& dz, int features, std::size_t count,
-                             BatchFeatures& e) {
-    for (int k = 0; k < features; ++k) {
-        float* de = e.value[k];
-        for (std::size_t i = 0; i < count; ++i) de[i] = 0.0f;
-        for (int r = 0; r < m.rows; ++r) {
-            const float w = m.weight[r][k];
-            const float* d = dz.value[r];
-            for (std::size_t i = 0; i < count; ++i) de[i] += w * d[i];
+                             const BlockFeatures& d_features, std::size_t first) {
+    constexpr int kRows = TextureField::kOutputs;
+    for (std::size_t i = 0; i < count; i += 8) {
+        Float8 d[kRows];
+        for (int r = 0; r < kRows; ++r) std::memcpy(&d[r], dz.value[r] + i, sizeof d[r]);
+        for (int k = 0; k < features; ++k) {
+            Float8 de = {};
+            for (int r = 0; r < kRows; ++r) de += m.weight[r][k] * d[r];
+            std::memcpy(d_features.feature(k, first + i), &de, sizeof de);
         }
     }
 }
 
+// Per-thread scratch of the parallel tasks: grid coordinates and encodings of one encode block.
+// Grows on first use and is reused afterwards, so the hot path allocates nothing.
+struct TaskScratch {
+    std::vector<float> coords;    // 3 x kEncodeStride
+    std::vector<float> features;  // kMaxFeatures x kEncodeStride, zero-initialized (finite padding)
+};
+
+TaskScratch& task_scratch() {
+    thread_local TaskScratch scratch;
+    if (scratch.features.empty()) {
+        scratch.coords.resize(3 * kEncodeStride);
+        scratch.features.resize(std::size_t(kMaxFeatures) * kEncodeStride);
+    }
+    return scratch;
+}
+
+// Sanitized grid coordinates of `count` world points, written structure-of-arrays to
+// coords[d * stride + i].
+GridPointArrays to_grid_arrays(const TextureField& field, const Vec3f* points, std::size_t count, float* coords,
+                               std::size_t stride) {
+    for (std::size_t i = 0; i < count; ++i) {
+        const Vec3f g = field.to_grid(points[i]);
+        for (int d = 0; d < 3; ++d) coords[std::size_t(d) * stride + i] = HashGrid::sanitize_coordinate(g[d]);
+    }
+    return GridPointArrays{{coords, coords + stride, coords + 2 * stride}};
+}
+
+// Encodes one encode block into `e` and zeroes the rows from `count` to the next multiple of 8:
+// the heads read those padding entries 8 points at a time, and they must be finite.
+void encode_block(const HashGrid& grid, const float* parameters, const GridPointArrays& x, std::size_t count,
+                  int features, const BlockFeatures& e) {
+    grid.encode_levels(parameters, x, count, e.data, e.stride);
+    const std::size_t padded = (count + 7) / 8 * 8;
+    for (int k = 0; k < features; ++k) std::fill(e.feature(k, count), e.feature(k, padded), 0.0f);
+}
+
+// Floats of the cached encodings of `n` points: whole encode blocks of padded rows.
+std::size_t cache_floats(std::size_t n, int features) {
+    return chunk_count(n, kEncodeBlock) * std::size_t(features) * kEncodeStride;
+}
+
 }  // namespace
 
+void FieldCache::clear() {
+    m_features = {};
+    m_points = 0;
+    m_field = nullptr;
+}
+
 void TextureField::evaluate(const Vec3f* points, std::size_t n, FieldOutputs* out) const {
+    evaluate_impl(points, n, out, nullptr);
+}
+
+void TextureField::evaluate(const Vec3f* points, std::size_t n, FieldOutputs* out, FieldCache& cache) const {
+    const std::size_t floats = cache_floats(n, feature_count());
+    if (cache.m_features.size() < floats) cache.m_features.resize(floats);
+    cache.m_points = n;
+    cache.m_field = this;
+    evaluate_impl(points, n, out, cache.m_features.data());
+}
+
+void TextureField::evaluate_impl(const Vec3f* points, std::size_t n, FieldOutputs* out, float* cache) const {
     const int features = feature_count();
     HeadMatrix heads;
     build_head_matrix(m_parameters.data() + m_head_offset, features, m_config.labels, heads);
-    parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
-        Vec3f x[kBatch];
-        BatchFeatures e;
+    // Fixed encode blocks (not TBB's ranges), so a block's cached encodings sit at a known place.
+    parallel_for(chunk_count(n, kEncodeBlock), 1, [&](std::size_t s0, std::size_t s1) {
+        TaskScratch& scratch = task_scratch();
         BatchOutputs z;
-        for (std::size_t b = begin; b < end; b += kBatch) {
-            const std::size_t count = std::min(kBatch, end - b);
-            for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
-            m_grid.encode_batch(m_parameters.data(), x, count, e.value[0], kBatch);
-            heads_forward(heads, e, features, count, z);
-            for (std::size_t i = 0; i < count; ++i) activate(z, i, out[b + i]);
+        for (std::size_t s = s0; s < s1; ++s) {
+            const std::size_t block = s * kEncodeBlock;
+            const std::size_t count = std::min(kEncodeBlock, n - block);
+            const GridPointArrays x =
+                to_grid_arrays(*this, points + block, count, scratch.coords.data(), kEncodeStride);
+            const BlockFeatures e{
+                cache ? cache + s * std::size_t(features) * kEncodeStride : scratch.features.data(), kEncodeStride};
+            encode_block(m_grid, m_parameters.data(), x, count, features, e);
+            for (std::size_t b = 0; b < count; b += kBatch) {
+                const std::size_t batch = std::min(kBatch, count - b);
+                heads_forward(heads, ConstBlockFeatures{e.data, e.stride}, b, features, batch, z);
+                for (std::size_t i = 0; i < batch; ++i) activate(z, i, out[block + b + i]);
+            }
         }
     });
 }
 
 void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, std::size_t n,
                             std::vector<float>& gradient) const {
+    backward_impl(points, grads, n, gradient, nullptr);
+}
+
+void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, std::size_t n,
+                            std::vector<float>& gradient, const FieldCache& cache) const {
+    if (cache.m_field != this || cache.m_points != n)
+        throw_error("field backward: the cache holds {} points of {} field, not the {} points of this "
+                    "backward (fill it with evaluate() on the same points first)",
+                    cache.m_points,
+                    cache.m_field == this ? "this" : "another",
+                    n);
+    backward_impl(points, grads, n, gradient, cache.m_features.data());
+}
+
+void TextureField::backward_impl(const Vec3f* points, const FieldOutputGrads* grads, std::size_t n,
+                                 std::vector<float>& gradient, const float* cache) const {
     if (gradient.size() != m_parameters.size()) gradient.assign(m_parameters.size(), 0.0f);
     if (n == 0) return;
     const int features = feature_count();
@@ -256,6 +367,7 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
     const std::size_t head_count = m_parameters.size() - m_head_offset;
     const std::size_t chunks = chunk_count(n, kChunk);
     const std::size_t block_points = kBlockChunks * kChunk;
+    const std::size_t block_stride = padded_stride(block_points);
     HeadMatrix heads;
     build_head_matrix(m_parameters.data() + m_head_offset, features, m_config.labels, heads);
     const HeadRows rows = head_rows_of(features);
@@ -263,71 +375,71 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
     // Scratch grows once and is reused by later calls (the hot path allocates nothing).
     if (m_scratch.head_partials.size() < chunks * head_count)
         m_scratch.head_partials.resize(chunks * head_count);
-    if (m_scratch.d_features.size() < block_points * std::size_t(features))
-        m_scratch.d_features.resize(block_points * std::size_t(features));
-    float* d_features = m_scratch.d_features.data();
+    if (m_scratch.d_features.size() < block_stride * std::size_t(features))
+        m_scratch.d_features.resize(block_stride * std::size_t(features));
+    if (m_scratch.coords.size() < block_stride * 3) m_scratch.coords.resize(block_stride * 3);
+    BlockFeatures d_features{m_scratch.d_features.data(), block_stride};
+    float* coords = m_scratch.coords.data();
     float* partials = m_scratch.head_partials.data();
 
-    // Two phases per block of points. Phase A (parallel over fixed chunks): forward, output
-    // gradients -> head pre-activation gradients dz, per-chunk head gradients, and the encoding
-    // gradient de = W^T dz stored level-major. Phase B (parallel over levels): each level's task
-    // scatters de into its own table in point order. Every grid entry is therefore summed in
-    // point order by exactly one task, and head gradients in chunk order: bit-identical for
-    // any thread count, without atomics or per-thread copies of the 3.8 MB grid gradient, and
-    // each task's scatter target (one level table, <= 256 KiB) stays in cache.
+    // Two phases per block of points. Phase A (parallel over fixed encode blocks of whole
+    // chunks): grid coordinates, forward, output gradients -> head pre-activation gradients dz,
+    // per-chunk head gradients, and the encoding gradient de = W^T dz, stored feature-major.
+    // Phase B (parallel over levels): each level's task scatters de into its own table in point
+    // order. Every grid entry is therefore summed in point order by exactly one task, and head
+    // gradients in chunk order: bit-identical for any thread count, without atomics or
+    // per-thread copies of the 3.8 MB grid gradient, and each task's scatter target (one level
+    // table, <= 256 KiB) stays in cache.
     for (std::size_t block_begin = 0; block_begin < n; block_begin += block_points) {
         const std::size_t block_end = std::min(n, block_begin + block_points);
-        const std::size_t first_chunk = block_begin / kChunk;
-        const std::size_t block_chunks = chunk_count(block_end - block_begin, kChunk);
+        const std::size_t block_count = block_end - block_begin;
+        const GridPointArrays block_x{{coords, coords + block_stride, coords + 2 * block_stride}};
 
-        parallel_for(block_chunks, 1, [&](std::size_t c0, std::size_t c1) {
-            Vec3f x[kBatch];
-            BatchFeatures e;
+        parallel_for(chunk_count(block_count, kEncodeBlock), 1, [&](std::size_t s0, std::size_t s1) {
+            TaskScratch& scratch = task_scratch();
             BatchOutputs z, dz;
             // Padding entries of a short batch must be finite zeros for the lane sums.
-            for (auto& row : e.value) std::fill(row, row + kBatch, 0.0f);
             for (auto& row : dz.value) std::fill(row, row + kBatch, 0.0f);
-            for (std::size_t c = c0; c < c1; ++c) {
-                float* partial = partials + (first_chunk + c) * head_count;
-                std::fill(partial, partial + head_count, 0.0f);
-                const std::size_t begin = block_begin + c * kChunk;
-                const std::size_t end = std::min(block_end, begin + kChunk);
-                for (std::size_t b = begin; b < end; b += kBatch) {
-                    const std::size_t count = std::min(kBatch, end - b);
-                    for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
-                    m_grid.encode_batch(m_parameters.data(), x, count, e.value[0], kBatch);
-                    heads_forward(heads, e, features, count, z);
-                    for (std::size_t i = 0; i < count; ++i)
-                        activation_backward(z, i, grads[b + i], m_config.labels, dz);
-                    for (std::size_t i = count; i < kBatch; ++i)
-                        for (auto& row : dz.value) row[i] = 0.0f;
-                    heads_backward_weights(heads, rows, e, dz, features, count, partial);
-                    heads_backward_features(heads, dz, features, count, e);
-                    const std::size_t local = b - block_begin;
-                    for (std::size_t l = 0; l < levels; ++l) {
-                        float* dst = d_features + (l * block_points + local) * 2;
-                        const float* d0 = e.value[2 * l];
-                        const float* d1 = e.value[2 * l + 1];
-                        for (std::size_t i = 0; i < count; ++i) {
-                            dst[2 * i] = d0[i];
-                            dst[2 * i + 1] = d1[i];
-                        }
+            for (std::size_t s = s0; s < s1; ++s) {
+                const std::size_t local = s * kEncodeBlock;  // first point, relative to the block
+                const std::size_t count = std::min(kEncodeBlock, block_count - local);
+                const GridPointArrays x = to_grid_arrays(
+                    *this, points + block_begin + local, count, coords + local, block_stride);
+                ConstBlockFeatures e{scratch.features.data(), kEncodeStride};
+                if (cache) {
+                    const std::size_t cached_block = (block_begin + local) / kEncodeBlock;
+                    e.data = cache + cached_block * std::size_t(features) * kEncodeStride;
+                } else {
+                    encode_block(m_grid, m_parameters.data(), x, count, features,
+                                 BlockFeatures{scratch.features.data(), kEncodeStride});
+                }
+                for (std::size_t c = 0; c < chunk_count(count, kChunk); ++c) {
+                    float* partial = partials + ((block_begin + local) / kChunk + c) * head_count;
+                    std::fill(partial, partial + head_count, 0.0f);
+                    const std::size_t chunk_end = std::min(count, (c + 1) * kChunk);
+                    for (std::size_t b = c * kChunk; b < chunk_end; b += kBatch) {
+                        const std::size_t batch = std::min(kBatch, chunk_end - b);
+                        const std::size_t first = block_begin + local + b;  // global point index
+                        heads_forward(heads, e, b, features, batch, z);
+                        for (std::size_t i = 0; i < batch; ++i)
+                            activation_backward(z, i, grads[first + i], m_config.labels, dz);
+                        for (std::size_t i = batch; i < kBatch; ++i)
+                            for (auto& row : dz.value) row[i] = 0.0f;
+                        heads_backward_weights(heads, rows, e, b, dz, features, batch, partial);
+                        heads_backward_features(heads, dz, features, batch, d_features, local + b);
                     }
                 }
             }
         });
 
         parallel_for(levels, 1, [&](std::size_t l0, std::size_t l1) {
-            Vec3f x[kBatch];
-            for (std::size_t l = l0; l < l1; ++l) {
-                const float* src = d_features + l * block_points * 2;
-                for (std::size_t b = block_begin; b < block_end; b += kBatch) {
-                    const std::size_t count = std::min(kBatch, block_end - b);
-                    for (std::size_t i = 0; i < count; ++i) x[i] = to_grid(points[b + i]);
-                    m_grid.accumulate_level_gradient_batch(
-                        int(l), x, count, src + (b - block_begin) * 2, gradient.data());
-                }
-            }
+            for (std::size_t l = l0; l < l1; ++l)
+                m_grid.accumulate_level_gradient(int(l),
+                                                 block_x,
+                                                 block_count,
+                                                 d_features.feature(int(2 * l), 0),
+                                                 d_features.feature(int(2 * l + 1), 0),
+                                                 gradient.data());
         });
     }
 

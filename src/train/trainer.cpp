@@ -58,6 +58,7 @@ struct Trainer::Batch {
     std::vector<Vec3f> points;
     std::vector<FieldOutputs> outputs;
     std::vector<FieldOutputGrads> grads;
+    FieldCache field_cache;  // the forward's encodings, reused by the backward (no second gather)
     // Patch view-space normals, P x R x R, zero vectors off the surface.
     std::vector<Vec3f> patch_pred, patch_target, patch_grad;
     // Visual images at the output size, B x S x S x 3 (interleaved, image after image).
@@ -178,7 +179,7 @@ LossRecord Trainer::step() {
     // ---- 2. Field forward --------------------------------------------------------------------
     t0 = Clock::now();
     b.outputs.resize(n);
-    m_field->evaluate(b.points.data(), n, b.outputs.data());
+    m_field->evaluate(b.points.data(), n, b.outputs.data(), b.field_cache);
     b.grads.assign(n, FieldOutputGrads{});
     m_times.field_forward += seconds_since(t0);
 
@@ -411,7 +412,7 @@ LossRecord Trainer::step() {
     // ---- 5. Backward and Adam -----------------------------------------------------------------
     t0 = Clock::now();
     std::fill(m_gradient.begin(), m_gradient.end(), 0.0f);
-    m_field->backward(b.points.data(), b.grads.data(), n, m_gradient);
+    m_field->backward(b.points.data(), b.grads.data(), n, m_gradient, b.field_cache);
     m_times.field_backward += seconds_since(t0);
     for (float g : m_gradient)
         if (!std::isfinite(g)) throw_error("iteration {}: the field gradient is not finite; the field was not updated", i);

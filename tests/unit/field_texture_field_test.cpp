@@ -201,3 +201,37 @@ TEST(TextureField, BackwardIsBitIdenticalOnOneAndTwoThreads) {
     for (std::size_t i = 0; i < one.size(); i += 97)
         ASSERT_NEAR(two[i], 2.0f * one[i], 1e-3f * std::abs(one[i]) + 1e-8f) << i;
 }
+
+TEST(TextureField, CachedForwardGivesTheSameOutputsAndGradientBits) {
+    FieldConfig config;
+    config.labels = true;
+    const TextureField field(config, kDomain, 21);
+    // Not a multiple of the encode block, so the last cached block is partial.
+    const std::size_t n = 20000;
+    const auto points = random_points(n, 22);
+    const auto grads = random_grads(n, 23);
+    std::vector<FieldOutputs> plain(n), cached(n);
+    field.evaluate(points.data(), n, plain.data());
+    FieldCache cache;
+    // A larger batch first: the cache is reused for a smaller one.
+    const auto more = random_points(n + 5000, 24);
+    std::vector<FieldOutputs> scratch(more.size());
+    field.evaluate(more.data(), more.size(), scratch.data(), cache);
+    field.evaluate(points.data(), n, cached.data(), cache);
+    EXPECT_EQ(cache.point_count(), n);
+    EXPECT_EQ(std::memcmp(plain.data(), cached.data(), n * sizeof(FieldOutputs)), 0);
+
+    std::vector<float> recomputed, from_cache;
+    field.backward(points.data(), grads.data(), n, recomputed);
+    {
+        ThreadLimit limit(1);
+        field.backward(points.data(), grads.data(), n, from_cache, cache);
+    }
+    ASSERT_EQ(recomputed.size(), from_cache.size());
+    EXPECT_EQ(std::memcmp(recomputed.data(), from_cache.data(), recomputed.size() * sizeof(float)), 0);
+
+    // A cache of another point count is an internal error, not silent garbage.
+    EXPECT_THROW(field.backward(points.data(), grads.data(), n - 1, from_cache, cache), Error);
+    cache.clear();
+    EXPECT_EQ(cache.point_count(), 0u);
+}

@@ -34,6 +34,12 @@ struct HashGridLevel {
     std::uint64_t modulo_magic = 0;  ///< Lemire fastmod constant for `% table_size`
 };
 
+/// Grid-space points as structure-of-arrays: coordinate d of point i is `coord[d][i]`, already
+/// passed through HashGrid::sanitize_coordinate. The input of the block functions.
+struct GridPointArrays {
+    const float* coord[3];
+};
+
 /// The 8 trilinear corners of one level around one point.
 struct GridCorners {
     std::uint32_t index[8];  ///< entry index inside the level, < table_size
@@ -81,16 +87,22 @@ public:
 
     /// Encodes `count` <= kBatch grid-space points `x`, feature-major: feature k of point i goes
     /// to `features[k * stride + i]` (stride >= count), the layout the heads read 8 points per
-    /// instruction. Level by level, with the batch's corner indices computed (vectorized) and
-    /// prefetched before they are read, so cache misses on the hashed levels overlap.
+    /// instruction. Same results as encode_levels().
     void encode_batch(const float* grid_params, const Vec3f* x, std::size_t count, float* features,
                       std::size_t stride) const;
 
-    /// Adds d(features of `level`)/d(grid params)^T * d for `count` <= kBatch points: for point
-    /// i, `d_features[2i], d_features[2i+1]` (dL/d features 2l, 2l+1) are spread over its 8
-    /// corners, in point order (so the sums are deterministic). Points with d = (0,0) are skipped.
-    void accumulate_level_gradient_batch(int level, const Vec3f* x, std::size_t count,
-                                         const float* d_features, float* grid_gradient) const;
+    /// Encodes any number of points, feature-major like encode_batch(), level by level: all
+    /// `count` points read level 0's table, then level 1's, and so on, so one level's table
+    /// (<= 256 KiB for the defaults) stays in the core's cache while thousands of points gather
+    /// from it. Corner indices are computed kBatch points at a time (vectorized) and prefetched.
+    void encode_levels(const float* grid_params, const GridPointArrays& x, std::size_t count, float* features,
+                       std::size_t stride) const;
+
+    /// Adds d(features of `level`)/d(grid params)^T * d for `count` points: for point i,
+    /// (d0[i], d1[i]) (dL/d features 2l, 2l+1) is spread over its 8 corners, in point order (so
+    /// the sums are deterministic). Points with d = (0,0) are skipped.
+    void accumulate_level_gradient(int level, const GridPointArrays& x, std::size_t count, const float* d0,
+                                   const float* d1, float* grid_gradient) const;
 
 private:
     HashGridConfig m_config;
