@@ -9,7 +9,7 @@ Command register_optimize(CLI::App& root) {
     auto options = std::make_shared<OptimizeOptions>();
     Command command;
     CLI::App* app = root.add_subcommand(
-        "optimize", "Learn an albedo map and a tactile normal map for a mesh from a scene file, and export the asset");
+        "optimize", "learn an albedo map and a tactile normal map for a mesh from a scene file, and export the asset");
     app->add_option("scene", options->scene_path, "scene file (JSON)")->required()->check(CLI::ExistingFile);
     app->add_option("overrides", options->overrides, "scene overrides key=value (e.g. optimize.iterations=50 seed=7)");
     app->add_option("-o,--output", options->output_dir, "output folder")->required();
