@@ -150,7 +150,8 @@ void HashGrid::encode_batch(const float* grid_params, const Vec3f* x, std::size_
     BatchPoints p;
     for (std::size_t i = 0; i < count; ++i)
         for (int d = 0; d < 3; ++d) p.coord[d][i] = sanitize_coordinate(x[i][d]);
-    encode_levels(grid_params, GridPointArrays{{p.coord[0], p.coord[1], p.coord[2]}}, count, features, stride);
+    encode_levels(
+        grid_params, GridPointArrays{{p.coord[0], p.coord[1], p.coord[2]}}, count, features, stride);
 }
 
 void HashGrid::encode_levels(const float* grid_params, const GridPointArrays& x, std::size_t count,
@@ -170,8 +171,8 @@ void HashGrid::encode_levels(const float* grid_params, const GridPointArrays& x,
     }
 }
 
-void HashGrid::accumulate_level_gradient(int level, const GridPointArrays& x, std::size_t count, const float* d0,
-                                         const float* d1, float* grid_gradient) const {
+void HashGrid::accumulate_level_gradient(int level, const GridPointArrays& x, std::size_t count,
+                                         const float* d0, const float* d1, float* grid_gradient) const {
     const HashGridLevel& l = m_levels[std::size_t(level)];
     float* table = grid_gradient + std::size_t(l.offset) * kFeaturesPerLevel;
     BatchCorners bc;

@@ -214,8 +214,9 @@ inline void activation_backward(const BatchOutputs& z, std::size_t i, const Fiel
 // are combined in a fixed order, so they vectorize and stay deterministic. Entries i >= count
 // of dz must be 0 up to the next multiple of 8 (and e finite there).
 TDF_MULTIVERSION
-void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const ConstBlockFeatures& e, std::size_t first,
-                            const BatchOutputs& dz, int features, std::size_t count, float* partial) {
+void heads_backward_weights(const HeadMatrix& m, const HeadRows& rows, const ConstBlockFeatures& e,
+                            std::size_t first, const BatchOutputs& dz, int features, std::size_t count,
+                            float* partial) {
     const std::size_t padded = (count + 7) / 8 * 8;
     auto lane_sum = [](const float* lanes) {
         return ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3])) +
@@ -274,8 +275,8 @@ TaskScratch& task_scratch() {
 
 // Sanitized grid coordinates of `count` world points, written structure-of-arrays to
 // coords[d * stride + i].
-GridPointArrays to_grid_arrays(const TextureField& field, const Vec3f* points, std::size_t count, float* coords,
-                               std::size_t stride) {
+GridPointArrays to_grid_arrays(const TextureField& field, const Vec3f* points, std::size_t count,
+                               float* coords, std::size_t stride) {
     for (std::size_t i = 0; i < count; ++i) {
         const Vec3f g = field.to_grid(points[i]);
         for (int d = 0; d < 3; ++d) coords[std::size_t(d) * stride + i] = HashGrid::sanitize_coordinate(g[d]);
@@ -331,7 +332,8 @@ void TextureField::evaluate_impl(const Vec3f* points, std::size_t n, FieldOutput
             const GridPointArrays x =
                 to_grid_arrays(*this, points + block, count, scratch.coords.data(), kEncodeStride);
             const BlockFeatures e{
-                cache ? cache + s * std::size_t(features) * kEncodeStride : scratch.features.data(), kEncodeStride};
+                cache ? cache + s * std::size_t(features) * kEncodeStride : scratch.features.data(),
+                kEncodeStride};
             encode_block(m_grid, m_parameters.data(), x, count, features, e);
             for (std::size_t b = 0; b < count; b += kBatch) {
                 const std::size_t batch = std::min(kBatch, count - b);
@@ -350,11 +352,12 @@ void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, 
 void TextureField::backward(const Vec3f* points, const FieldOutputGrads* grads, std::size_t n,
                             std::vector<float>& gradient, const FieldCache& cache) const {
     if (cache.m_field != this || cache.m_points != n)
-        throw_error("field backward: the cache holds {} points of {} field, not the {} points of this "
-                    "backward (fill it with evaluate() on the same points first)",
-                    cache.m_points,
-                    cache.m_field == this ? "this" : "another",
-                    n);
+        throw_error(
+            "field backward: the cache holds {} points of {} field, not the {} points of this "
+            "backward (fill it with evaluate() on the same points first)",
+            cache.m_points,
+            cache.m_field == this ? "this" : "another",
+            n);
     backward_impl(points, grads, n, gradient, cache.m_features.data());
 }
 
@@ -403,14 +406,18 @@ void TextureField::backward_impl(const Vec3f* points, const FieldOutputGrads* gr
             for (std::size_t s = s0; s < s1; ++s) {
                 const std::size_t local = s * kEncodeBlock;  // first point, relative to the block
                 const std::size_t count = std::min(kEncodeBlock, block_count - local);
-                const GridPointArrays x = to_grid_arrays(
-                    *this, points + block_begin + local, count, coords + local, block_stride);
+                const GridPointArrays x =
+                    to_grid_arrays(*this, points + block_begin + local, count, coords + local, block_stride);
                 ConstBlockFeatures e{scratch.features.data(), kEncodeStride};
                 if (cache) {
                     const std::size_t cached_block = (block_begin + local) / kEncodeBlock;
                     e.data = cache + cached_block * std::size_t(features) * kEncodeStride;
                 } else {
-                    encode_block(m_grid, m_parameters.data(), x, count, features,
+                    encode_block(m_grid,
+                                 m_parameters.data(),
+                                 x,
+                                 count,
+                                 features,
                                  BlockFeatures{scratch.features.data(), kEncodeStride});
                 }
                 for (std::size_t c = 0; c < chunk_count(count, kChunk); ++c) {

@@ -93,8 +93,8 @@ public:
 
     /// Encodes any number of points, feature-major like encode_batch(), level by level: all
     /// `count` points read level 0's table, then level 1's, and so on, so one level's table
-    /// (<= 256 KiB for the defaults) stays in the core's cache while thousands of points gather
-    /// from it. Corner indices are computed kBatch points at a time (vectorized) and prefetched.
+    /// (<= 256 KiB for the defaults) is read by many points in a row. Corner indices are
+    /// computed kBatch points at a time (vectorized) and prefetched before they are read.
     void encode_levels(const float* grid_params, const GridPointArrays& x, std::size_t count, float* features,
                        std::size_t stride) const;
 
