@@ -51,10 +51,13 @@ std::vector<std::string> write_turntable(const std::string& folder, const Triang
     RenderSettings settings;
     settings.shading = ShadingMode::Visualizer;
     const Renderer renderer(mesh, scene, material, settings);
-    // Frame the object whatever its units: the bounding sphere fills the view.
+    // Frame the object whatever its units: a sphere around the box centre through the farthest
+    // vertex fills the view.
     const Bounds3 bounds = compute_bounds(mesh);
+    float extent = 0.0f;
+    for (const Vec3f& p : mesh.positions) extent = std::max(extent, length(p - bounds.center()));
     const float fovy = 50.0f;
-    const float radius = 1.1f * 0.5f * length(bounds.extent()) / std::sin(radians(fovy) * 0.5f);
+    const float radius = 1.05f * extent / std::sin(radians(fovy) * 0.5f);
     const std::vector<Pass> passes = {Pass::Albedo, Pass::Lambertian, Pass::TactileNormal, Pass::ShadingNormal};
     for (int k = 0; k < views; ++k) {
         const float azimuth = 360.0f * float(k) / float(views);

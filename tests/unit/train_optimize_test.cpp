@@ -85,7 +85,7 @@ TEST(Optimize, ExportsReferenceFilesAndMaterialWithNormalMap) {
     const std::string base = run_into("exports", small_run(4, 2));
     for (const char* suffix : {".obj", ".mtl", ".glb", "_albedo.png", "_tactile_normal.png", "_albedo.exr",
                                "_tactile_normal.exr", "_config.json", "_losses.jsonl", "_loss_plot.svg",
-                               "_report.json", "_initialized.obj", "_initialized_albedo.png"})
+                               "_report.json", "_initialized.obj", "_initialized_albedo.png", "_initialized_report.json"})
         EXPECT_TRUE(fs::exists(base + suffix)) << base + suffix;
     const std::string mtl = read_text_file(base + ".mtl");
     EXPECT_NE(mtl.find("map_Kd pebble_albedo.png"), std::string::npos) << mtl;
