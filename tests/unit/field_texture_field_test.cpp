@@ -52,6 +52,23 @@ double weighted_outputs(const TextureField& field, const std::vector<Vec3f>& poi
     return sum;
 }
 
+// Finite differences (step 1e-2) of weighted_outputs against `gradient` at `indices`.
+bool gradient_matches_finite_differences(TextureField& field, const std::vector<Vec3f>& points,
+                                         const std::vector<FieldOutputGrads>& grads, const std::vector<float>& gradient,
+                                         const std::vector<std::size_t>& indices) {
+    test::GradCheckConfig check;
+    check.step = 1e-2;
+    return test::check_gradient(
+        [&](const std::vector<float>& p) {
+            field.parameters() = p;
+            return weighted_outputs(field, points, grads);
+        },
+        field.parameters(),
+        gradient,
+        indices,
+        check);
+}
+
 }  // namespace
 
 TEST(TextureField, ParameterLayoutMatchesReference) {
@@ -126,17 +143,7 @@ TEST(TextureField, BackwardMatchesFiniteDifferencesForHeads) {
     const std::size_t heads = field.parameter_block("albedo.weight").offset;
     std::vector<std::size_t> indices;
     for (std::size_t i = heads; i < field.parameter_count(); ++i) indices.push_back(i);
-    test::GradCheckConfig check;
-    check.step = 1e-2;
-    EXPECT_TRUE(test::check_gradient(
-        [&](const std::vector<float>& p) {
-            field.parameters() = p;
-            return weighted_outputs(field, points, grads);
-        },
-        field.parameters(),
-        gradient,
-        indices,
-        check));
+    EXPECT_TRUE(gradient_matches_finite_differences(field, points, grads, gradient, indices));
 }
 
 TEST(TextureField, BackwardMatchesFiniteDifferencesForDenseAndHashedLevels) {
@@ -161,17 +168,7 @@ TEST(TextureField, BackwardMatchesFiniteDifferencesForDenseAndHashedLevels) {
         EXPECT_GE(found, 8u) << "level " << level;
         indices.push_back(std::size_t(l.offset) * 2 + 1);  // most likely untouched: gradient 0
     }
-    test::GradCheckConfig check;
-    check.step = 1e-2;
-    EXPECT_TRUE(test::check_gradient(
-        [&](const std::vector<float>& p) {
-            field.parameters() = p;
-            return weighted_outputs(field, points, grads);
-        },
-        field.parameters(),
-        gradient,
-        indices,
-        check));
+    EXPECT_TRUE(gradient_matches_finite_differences(field, points, grads, gradient, indices));
 }
 
 TEST(TextureField, BackwardIsBitIdenticalOnOneAndTwoThreads) {
