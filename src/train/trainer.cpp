@@ -285,7 +285,9 @@ LossRecord Trainer::step() {
         const bool resized = g.width != S || g.height != S;
         // Renders composited on white at the internal size, then resized to S x S (spec 3.8).
         const auto render_internal = [&](auto&& colour_of_hit, float* out) {
-            b.internal = Image(g.width, g.height, 3, 1.0f);
+            if (b.internal.width() != g.width || b.internal.height() != g.height)
+                b.internal = Image(g.width, g.height, 3);
+            std::fill(b.internal.values().begin(), b.internal.values().end(), 1.0f);  // white background
             parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
                 for (std::size_t p = begin; p < end; ++p) {
                     const int q = point_of[p];
