@@ -38,11 +38,10 @@ BakedMaps export_asset(const std::string& folder, const std::string& name, const
     return maps;
 }
 
-std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const BakedMaps& maps,
-                                         int views, int resolution) {
+std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const EmbreeScene& scene,
+                                         const BakedMaps& maps, int views, int resolution) {
     std::vector<std::string> written;
     if (views <= 0) return written;
-    const EmbreeScene scene(mesh);
     const MipTexture albedo(maps.albedo), tactile(maps.tactile_normal);
     SurfaceMaterial material;
     material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;

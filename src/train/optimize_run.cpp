@@ -55,18 +55,6 @@ std::unique_ptr<GuidanceBackend> make_backend(const std::string& name, const Run
     return backend;
 }
 
-void check_guidance_keys(const Json& guidance, const std::string& source) {
-    if (!guidance.is_object()) return;
-    const std::vector<std::string> names = GuidanceBackend::names();
-    for (auto it = guidance.begin(); it != guidance.end(); ++it) {
-        const std::string& key = it.key();
-        if (key == "visual" || key == "tactile" || key == "save_frames") continue;
-        if (std::find(names.begin(), names.end(), key) == names.end())
-            throw_error("{}: guidance: unknown key '{}' (expected visual, tactile, save_frames or a backend name)",
-                        source, key);
-    }
-}
-
 const Json& section(const SceneDescription& d, const char* name) {
     static const Json kNull;
     const auto it = d.sections.find(name);
@@ -80,7 +68,6 @@ void run_optimize(const OptimizeOptions& options) {
     const RunConfig config = RunConfig::from_json(section(description, "optimize"), section(description, "tactile_layout"),
                                                   section(description, "export"), section(description, "guidance"),
                                                   options.scene_path);
-    check_guidance_keys(section(description, "guidance"), options.scene_path);
     if (description.tactile_images.empty())
         throw_error("{}: the scene names no tactile texture (tactile.images); `tdf optimize` needs one", options.scene_path);
     const std::string name =
@@ -208,7 +195,8 @@ void run_optimize(const OptimizeOptions& options) {
 
     const BakedMaps maps = export_asset(options.output_dir, name, "", trainer.field(), assets->mesh, config);
     const QualityReport quality = trainer.evaluate_held_out();
-    write_turntable(options.output_dir, assets->mesh, maps, config.turntable_views, config.turntable_resolution);
+    write_turntable(options.output_dir, assets->mesh, *assets->scene, maps, config.turntable_views,
+                    config.turntable_resolution);
     const Json report = {{"quality", quality.to_json()},
                          {"seconds_per_iteration", trainer.stage_times().to_json(trainer.iteration())},
                          {"seconds_total", progress.elapsed_seconds()},

@@ -1,6 +1,9 @@
 #include <tdf/train/run_config.h>
 
 #include <tdf/core/error.h>
+#include <tdf/guidance/guidance_backend.h>
+
+#include <algorithm>
 
 namespace tdf {
 
@@ -71,6 +74,15 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
 
     // The guidance section is validated by the backends themselves; here only the names.
     if (guidance.is_object()) {
+        const std::vector<std::string> backends = GuidanceBackend::names();
+        for (auto it = guidance.begin(); it != guidance.end(); ++it) {
+            const std::string& key = it.key();
+            const bool known = key == "visual" || key == "tactile" || key == "save_frames" ||
+                               std::find(backends.begin(), backends.end(), key) != backends.end();
+            if (!known)
+                throw_error("{}: guidance: unknown key '{}' (expected visual, tactile, save_frames or a backend name)",
+                            source, key);
+        }
         c.guidance_config = guidance;
         if (guidance.contains("visual")) {
             if (!guidance["visual"].is_string()) throw_error("{}: guidance.visual must be a backend name", source);

@@ -1,5 +1,6 @@
 #include <tdf/train/trainer.h>
 
+#include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/core/parallel.h>
@@ -73,10 +74,10 @@ float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int
     for (std::size_t f = 0; f < mesh.triangles.size() && mesh.has_uvs(); ++f) {
         const Vec3i& t = mesh.triangles[f];
         const Vec3i& u = mesh.uv_triangles[f];
-        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
-        area_3d += 0.5 * double(length(cross(mesh.positions[std::size_t(t.y)] - p0, mesh.positions[std::size_t(t.z)] - p0)));
-        const Vec2f a = mesh.uvs[std::size_t(u.x)], b = mesh.uvs[std::size_t(u.y)], c = mesh.uvs[std::size_t(u.z)];
-        area_uv += 0.5 * std::fabs(double((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)));
+        area_3d += triangle_area(mesh.positions[std::size_t(t.x)], mesh.positions[std::size_t(t.y)],
+                                 mesh.positions[std::size_t(t.z)]);
+        area_uv += 0.5 * std::fabs(signed_uv_area2(mesh.uvs[std::size_t(u.x)], mesh.uvs[std::size_t(u.y)],
+                                                   mesh.uvs[std::size_t(u.z)]));
     }
     if (!(area_uv > 0) || !(area_3d > 0)) throw_error("{}: the UV atlas has no area", mesh.source_path);
     const double uv_mm = std::sqrt(area_3d / area_uv) * double(mm_per_unit);
@@ -441,14 +442,18 @@ Camera Trainer::held_out_patch(int k) const {
                              m_config.patch_half_extent);
 }
 
-LearnedImages Trainer::render_learned(const Camera& camera) const {
-    GBuffer g;
+void Trainer::trace_and_evaluate(const Camera& camera, GBuffer& g, std::vector<FieldOutputs>& outputs) const {
     trace_gbuffer(*m_target.scene, *m_target.mesh, camera, g);
     std::vector<Vec3f> points;
     for (std::size_t p = 0; p < g.pixel_count(); ++p)
         if (g.mask[p] > 0.0f) points.push_back(g.position[p]);
-    std::vector<FieldOutputs> outputs(points.size());
+    outputs.resize(points.size());
     m_field->evaluate(points.data(), points.size(), outputs.data());
+}
+
+namespace {
+// The learned images of a traced view; `outputs` holds the field at its hits in pixel order.
+LearnedImages learned_images(const Camera& camera, const GBuffer& g, const std::vector<FieldOutputs>& outputs) {
     LearnedImages images{Image(g.width, g.height, 3, 1.0f), Image(g.width, g.height, 3, 0.0f),
                          Image(g.width, g.height, 1, 0.0f)};
     const ViewRotation rot = view_rotation(camera);
@@ -463,6 +468,14 @@ LearnedImages Trainer::render_learned(const Camera& camera) const {
     }
     return images;
 }
+}  // namespace
+
+LearnedImages Trainer::render_learned(const Camera& camera) const {
+    GBuffer g;
+    std::vector<FieldOutputs> outputs;
+    trace_and_evaluate(camera, g, outputs);
+    return learned_images(camera, g, outputs);
+}
 
 QualityReport Trainer::evaluate_held_out() const {
     const RunConfig& cfg = m_config;
@@ -472,18 +485,9 @@ QualityReport Trainer::evaluate_held_out() const {
     std::size_t values_fg = 0, values_full = 0;
     GBuffer g;
     std::vector<FieldOutputs> outputs;
-    std::vector<Vec3f> points;
-    const auto evaluate_hits = [&](const Camera& camera) {
-        trace_gbuffer(*m_target.scene, mesh, camera, g);
-        points.clear();
-        for (std::size_t p = 0; p < g.pixel_count(); ++p)
-            if (g.mask[p] > 0.0f) points.push_back(g.position[p]);
-        outputs.resize(points.size());
-        m_field->evaluate(points.data(), points.size(), outputs.data());
-    };
     for (int k = 0; k < cfg.held_out_views; ++k) {
         const Camera camera = held_out_view(k);
-        evaluate_hits(camera);
+        trace_and_evaluate(camera, g, outputs);
         values_full += 3 * g.pixel_count();  // background: white in both, zero error (spec 5.2)
         std::size_t q = 0;
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
@@ -495,7 +499,7 @@ QualityReport Trainer::evaluate_held_out() const {
             }
             values_fg += 3;
         }
-        const LearnedImages learned = render_learned(camera);
+        const LearnedImages learned = learned_images(camera, g, outputs);
         alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
     }
     const auto psnr = [](double sum, std::size_t count) {
@@ -513,13 +517,13 @@ QualityReport Trainer::evaluate_held_out() const {
     std::size_t cosine_count = 0;
     for (int k = 0; k < cfg.held_out_patches; ++k) {
         const Camera camera = held_out_patch(k);
-        evaluate_hits(camera);
+        trace_and_evaluate(camera, g, outputs);
+        const LearnedImages learned = learned_images(camera, g, outputs);
         const ViewRotation rot = view_rotation(camera);
-        std::size_t q = 0;
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] <= 0.0f) continue;
-            const Vec3f learned = view_space_normal(rot, compose_shading_normal(frame_at(g, p), outputs[q++].normal));
-            cosine_sum += cosine_similarity(learned, target_view_normal(m_target, g, p, rot));
+            const float* n = learned.view_normals.data() + 3 * p;
+            cosine_sum += cosine_similarity({n[0], n[1], n[2]}, target_view_normal(m_target, g, p, rot));
             ++cosine_count;
         }
     }

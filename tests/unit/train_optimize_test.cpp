@@ -169,6 +169,7 @@ TEST(Optimize, BadConfigurationIsAClearError) {
     expect_error({"optimize.init_iterations=500"}, "init_iterations");
     expect_error({"tactile_layout.mode=physical"}, "mm_per_unit");
     expect_error({"guidance.visual=stable_diffusion"}, "unknown guidance backend");
+    expect_error({"guidance.visul=none"}, "guidance: unknown key 'visul'");
     expect_error({"tactile.images=[]"}, "no tactile texture");
 }
 

@@ -5,6 +5,7 @@
 /// renders of the result.
 #include <tdf/field/texture_field.h>
 #include <tdf/mesh/triangle_mesh.h>
+#include <tdf/scene/embree_scene.h>
 #include <tdf/train/run_config.h>
 #include <tdf/train/texture_bake.h>
 
@@ -22,7 +23,8 @@ BakedMaps export_asset(const std::string& folder, const std::string& name, const
 /// Renders `views` azimuths of the exported asset (baked maps, visualizer shading, light from the
 /// camera) and writes `<folder>/turntable/<pass>_<k>.png` for albedo, lambertian,
 /// tactile_normal and shading_normal. Returns the files written.
-std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const BakedMaps& maps,
-                                         int views, int resolution);
+/// `scene` must have been built from `mesh`.
+std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const EmbreeScene& scene,
+                                         const BakedMaps& maps, int views, int resolution);
 
 }  // namespace tdf

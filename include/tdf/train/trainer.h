@@ -103,6 +103,9 @@ public:
 private:
     struct Batch;  // per-iteration buffers, allocated once (trainer.cpp)
 
+    /// Traces `camera` into `g` and evaluates the field at its hits, in pixel order.
+    void trace_and_evaluate(const Camera& camera, GBuffer& g, std::vector<FieldOutputs>& outputs) const;
+
     const TrainingTarget m_target;
     const RunConfig m_config;
     const std::uint64_t m_seed;
