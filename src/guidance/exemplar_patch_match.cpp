@@ -344,12 +344,116 @@ private:
     std::vector<unsigned char> m_active;
 };
 
+/// Sorted tilts (angle from +z, radians) of every texel of level `level` of the variants.
+std::vector<float> sorted_tilts(const std::vector<Variant>& variants, std::size_t level) {
+    std::vector<float> tilts;
+    for (const Variant& v : variants) {
+        const Image& e = v.levels[level];
+        for (std::size_t p = 0; p < e.pixel_count(); ++p)
+            tilts.push_back(std::acos(std::clamp(e.data()[3 * p + 2], -1.0f, 1.0f)));
+    }
+    std::sort(tilts.begin(), tilts.end());
+    return tilts;
+}
+
+/// Histogram matching of the relief's steepness (Kopf et al. 2007 add it to texture
+/// optimization because averaging votes washes contrast out): the foreground normals are ranked
+/// by tilt and each gets the exemplar's tilt at the same quantile, keeping its azimuth. The
+/// image keeps where its relief is; its steepness distribution becomes the exemplar's.
+void match_tilt_histogram(Image& normals, const Image& mask, const std::vector<float>& exemplar_tilts) {
+    std::vector<std::pair<float, std::size_t>> order;
+    for (std::size_t p = 0; p < normals.pixel_count(); ++p)
+        if (mask.data()[p] > 0.0f) order.emplace_back(std::acos(std::clamp(normals.data()[3 * p + 2], -1.0f, 1.0f)), p);
+    if (order.empty() || exemplar_tilts.empty()) return;
+    std::sort(order.begin(), order.end());  // ties broken by pixel index: deterministic
+    for (std::size_t r = 0; r < order.size(); ++r) {
+        const double quantile = (double(r) + 0.5) / double(order.size());
+        const float tilt = exemplar_tilts[std::min(exemplar_tilts.size() - 1, std::size_t(quantile * double(exemplar_tilts.size())))];
+        float* n = normals.data() + 3 * order[r].second;
+        const float xy = std::sqrt(n[0] * n[0] + n[1] * n[1]);
+        const float cx = xy > 1e-6f ? n[0] / xy : 1.0f, cy = xy > 1e-6f ? n[1] / xy : 0.0f;
+        n[0] = std::sin(tilt) * cx, n[1] = std::sin(tilt) * cy, n[2] = std::cos(tilt);
+    }
+}
+
 /// Mixes the call's seed with the position in the algorithm into one stream seed (splitmix64).
 std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
     std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (1 + a * 1000003ULL + b);
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
     z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
     return z ^ (z >> 31);
+}
+
+/// Mirrored across the horizontal axis: rows reversed and y components negated, which is how a
+/// tangent-space map appears on a chart of handedness -1 (the bitangent is flipped).
+Image mirror_normal_map(const Image& image) {
+    Image out = flip_rows(image);
+    for (std::size_t p = 0; p < out.pixel_count(); ++p) out.data()[3 * p + 1] = -out.data()[3 * p + 1];
+    return out;
+}
+
+/// Resizes by `factor` (unit vectors in, unit vectors out); shrinking is prefiltered with a
+/// Gaussian of half the shrink factor so the coarse copy does not alias.
+Image scale_normal_map(const Image& image, const Image& mask, float factor) {
+    if (factor == 1.0f) return image;
+    const Image source = factor < 1.0f ? gaussian_blur_masked(image, mask, 0.5f / factor) : image;
+    Image out = resize_bilinear(source,
+                                std::max(1, int(std::lround(float(image.width()) * factor))),
+                                std::max(1, int(std::lround(float(image.height()) * factor))));
+    normalize_vectors(out);
+    return out;
+}
+
+/// The search pyramid of one exemplar variant: levels[0] = `finest`, then box-downsampled while
+/// both sides stay at least two patches wide, at most `levels` in all.
+Variant build_variant(Image finest, int levels, int patch_size) {
+    Variant variant;
+    variant.levels.push_back(std::move(finest));
+    for (int l = 1; l < levels; ++l) {
+        const Image& finer = variant.levels.back();
+        if (std::min(finer.width(), finer.height()) / 2 < patch_size) break;
+        Image coarser = downsample_half(finer);
+        normalize_vectors(coarser);
+        variant.levels.push_back(std::move(coarser));
+    }
+    return variant;
+}
+
+/// The rotation that takes the unit vector `a` to +z by the shortest arc, applied to `v`
+/// (or, with `inverse`, its transpose: +z back to `a`). Identity when `a` faces away.
+Vec3f shortest_arc_to_z(Vec3f a, Vec3f v, bool inverse) {
+    if (a.z <= -0.999f) return v;
+    // R = I + [c]x + [c]x^2 / (1 + a.z) with c = a x z = (a.y, -a.x, 0).
+    const Vec3f c(a.y, -a.x, 0.0f);
+    const Vec3f cv = inverse ? cross(v, c) : cross(c, v);
+    return v + cv + cross(c, cross(c, v)) / (1.0f + a.z);
+}
+
+/// How a request image is turned into the search problem: the working copy's size and the
+/// magnification the exemplar gets so one texel spans as many working pixels as in the image.
+struct WorkingScale {
+    int width = 0;
+    int height = 0;
+    float exemplar_factor = 1.0f;
+};
+
+/// Exemplars are magnified at most this much: beyond it their patches are smooth ramps that
+/// match anything, so the image is searched as a coarser copy instead (see the header).
+constexpr float kMaxExemplarMagnification = 2.0f;
+
+WorkingScale working_scale(float pixels_per_texel, int width, int height, int patch_size) {
+    WorkingScale w{width, height, pixels_per_texel};
+    if (pixels_per_texel <= kMaxExemplarMagnification) return w;
+    // Shrink by d = M / max so the exemplar needs the largest allowed magnification, but keep
+    // the copy at least three patches wide (or the image's size, if smaller).
+    float shrink = pixels_per_texel / kMaxExemplarMagnification;
+    const int short_side = std::min(width, height);
+    const int min_side = std::min(short_side, 3 * patch_size);
+    shrink = std::min(shrink, float(short_side) / float(min_side));
+    w.width = std::max(1, int(std::lround(float(width) / shrink)));
+    w.height = std::max(1, int(std::lround(float(height) / shrink)));
+    w.exemplar_factor = pixels_per_texel * float(w.width) / float(width);
+    return w;
 }
 
 }  // namespace
@@ -367,17 +471,31 @@ ExemplarPatchMatchBackend::Options ExemplarPatchMatchBackend::Options::from_json
             o.exemplar_files.push_back(f.get<std::string>());
         }
     }
-    o.exemplar_scale = reader.get<float>("exemplar_scale", o.exemplar_scale);
+    if (reader.has("exemplar_scale") && reader.raw("exemplar_scale").is_string()) {
+        if (reader.raw("exemplar_scale").get<std::string>() != "auto")
+            throw_error("{}: exemplar_scale must be \"auto\" or a number", reader.where());
+        o.exemplar_scale = 0.0f;
+    } else if (reader.has("exemplar_scale")) {
+        o.exemplar_scale = reader.get<float>("exemplar_scale", o.exemplar_scale);
+        if (!(o.exemplar_scale >= 0.125f && o.exemplar_scale <= 8.0f))
+            throw_error("{}: exemplar_scale {} is outside [0.125, 8] (or \"auto\")", reader.where(), o.exemplar_scale);
+    }
+    const std::string orientation = reader.get<std::string>("orientation", "surface");
+    if (orientation == "surface")
+        o.orientation = Options::Orientation::Surface;
+    else if (orientation == "search")
+        o.orientation = Options::Orientation::Search;
+    else
+        throw_error("{}: orientation \"{}\" must be \"surface\" or \"search\"", reader.where(), orientation);
     o.patch_size = reader.get<int>("patch_size", o.patch_size);
     o.levels = reader.get<int>("levels", o.levels);
     o.em_iterations = reader.get<int>("em_iterations", o.em_iterations);
     o.search_iterations = reader.get<int>("search_iterations", o.search_iterations);
     o.rotations = reader.get<int>("rotations", o.rotations);
     o.flip_rows = reader.get<bool>("flip_rows", o.flip_rows);
+    o.match_tilt_histogram = reader.get<bool>("match_tilt_histogram", o.match_tilt_histogram);
     reader.check_all_read();
     const std::string& where = reader.where();
-    if (!(o.exemplar_scale >= 0.125f && o.exemplar_scale <= 8.0f))
-        throw_error("{}: exemplar_scale {} is outside [0.125, 8]", where, o.exemplar_scale);
     if (o.patch_size < 3 || o.patch_size > 15 || o.patch_size % 2 == 0)
         throw_error("{}: patch_size {} must be odd, 3..15", where, o.patch_size);
     if (o.levels < 1 || o.levels > 6) throw_error("{}: levels {} is outside 1..6", where, o.levels);
@@ -402,9 +520,8 @@ ExemplarPatchMatchBackend::~ExemplarPatchMatchBackend() = default;
 
 void ExemplarPatchMatchBackend::set_exemplars(std::vector<Image> tangent_normals) {
     if (tangent_normals.empty()) throw_error("guidance backend 'exemplar_patch_match': no exemplars given");
-    std::vector<Variant> variants;
     for (std::size_t i = 0; i < tangent_normals.size(); ++i) {
-        Image exemplar = std::move(tangent_normals[i]);
+        Image& exemplar = tangent_normals[i];
         if (exemplar.channels() < 3)
             throw_error("guidance backend 'exemplar_patch_match': exemplar {} has {} channels, expected 3",
                         i,
@@ -412,41 +529,108 @@ void ExemplarPatchMatchBackend::set_exemplars(std::vector<Image> tangent_normals
         if (exemplar.channels() > 3) exemplar = exemplar.channel_range(0, 3);
         if (!exemplar.all_finite())
             throw_error("guidance backend 'exemplar_patch_match': exemplar {} has non-finite values", i);
-        if (m_options.exemplar_scale != 1.0f)
-            exemplar =
-                resize_bilinear(exemplar,
-                                std::max(1, int(std::lround(exemplar.width() * m_options.exemplar_scale))),
-                                std::max(1, int(std::lround(exemplar.height() * m_options.exemplar_scale))));
         normalize_vectors(exemplar);
+    }
+    m_exemplars = std::move(tangent_normals);
+    m_search_variants.clear();
+    m_search_factor = 0.0f;
+    // Fail now, not at the first refinement, when the exemplars cannot hold a patch.
+    search_variants(m_options.exemplar_scale > 0.0f ? m_options.exemplar_scale : 1.0f);
+}
+
+const std::vector<ExemplarPatchMatchBackend::Variant>& ExemplarPatchMatchBackend::search_variants(float factor) {
+    if (factor == m_search_factor && !m_search_variants.empty()) return m_search_variants;
+    std::vector<Variant> variants;
+    for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
+        const Image exemplar = scale_normal_map(m_exemplars[i], Image(), factor);
         for (int r = 0; r < m_options.rotations; ++r) {
-            const Image rotated =
-                rotate_normal_map(exemplar, 2.0f * kPi * float(r) / float(m_options.rotations));
-            for (int flip = 0; flip < (m_options.flip_rows ? 2 : 1); ++flip) {
-                Variant variant;
-                variant.levels.push_back(flip ? flip_rows(rotated) : rotated);
-                for (int l = 1; l < m_options.levels; ++l) {
-                    const Image& finer = variant.levels.back();
-                    if (std::min(finer.width(), finer.height()) / 2 < m_options.patch_size) break;
-                    Image coarser = downsample_half(finer);
-                    normalize_vectors(coarser);
-                    variant.levels.push_back(std::move(coarser));
-                }
-                const Image& finest = variant.levels.front();
-                if (std::min(finest.width(), finest.height()) < m_options.patch_size)
-                    throw_error(
-                        "guidance backend 'exemplar_patch_match': exemplar {} is {}x{} after scaling and "
-                        "rotation, smaller than a {}x{} patch",
-                        i,
-                        finest.width(),
-                        finest.height(),
-                        m_options.patch_size,
-                        m_options.patch_size);
-                variants.push_back(std::move(variant));
-            }
+            const Image rotated = rotate_normal_map(exemplar, 2.0f * kPi * float(r) / float(m_options.rotations));
+            for (int flip = 0; flip < (m_options.flip_rows ? 2 : 1); ++flip)
+                variants.push_back(build_variant(flip ? flip_rows(rotated) : rotated, m_options.levels, m_options.patch_size));
         }
     }
-    m_variants = std::move(variants);
-    m_exemplar_count = tangent_normals.size();
+    check_variants(variants, factor);
+    m_search_variants = std::move(variants);
+    m_search_factor = factor;
+    return m_search_variants;
+}
+
+void ExemplarPatchMatchBackend::check_variants(const std::vector<Variant>& variants, float factor) const {
+    for (const Variant& v : variants) {
+        const Image& finest = v.levels.front();
+        if (std::min(finest.width(), finest.height()) < m_options.patch_size)
+            throw_error("guidance backend 'exemplar_patch_match': an exemplar is {}x{} after scaling by {} and "
+                        "rotation, smaller than a {}x{} patch",
+                        finest.width(),
+                        finest.height(),
+                        factor,
+                        m_options.patch_size,
+                        m_options.patch_size);
+    }
+}
+
+Image ExemplarPatchMatchBackend::synthesize(const Image& input, const Image& input_mask,
+                                            const std::vector<Variant>& variants, std::uint64_t seed,
+                                            std::size_t item) const {
+    // Levels usable by every variant and by the image (at least two patches wide).
+    const int patch = m_options.patch_size;
+    std::size_t levels = std::size_t(m_options.levels);
+    for (const Variant& v : variants) levels = std::min(levels, v.levels.size());
+    {
+        int size = std::min(input.width(), input.height());
+        std::size_t fit = 1;
+        while (fit < levels && size / 2 >= 2 * patch) size /= 2, ++fit;
+        levels = fit;
+    }
+    std::vector<Image> inputs{input};
+    std::vector<Image> masks{input_mask};
+    for (std::size_t l = 1; l < levels; ++l) {
+        Image n, m;
+        downsample_weighted(inputs.back(), masks.back(), n, m);
+        inputs.push_back(std::move(n));
+        masks.push_back(std::move(m));
+    }
+
+    std::vector<Match> field;
+    Image estimate, previous_result;
+    int coarse_width = 0, coarse_height = 0;
+    for (std::size_t l = levels; l-- > 0;) {
+        estimate = inputs[l];
+        const std::uint64_t level_stage = std::uint64_t(l) * 1024;
+        if (!field.empty()) {
+            // Finer levels: the input plus the change the coarser level made (Laplacian
+            // transfer), so the input's relief stays where it is and only its texture changes;
+            // the coarser matches, carried down, start the search.
+            const Image up_result = resize_bilinear(previous_result, estimate.width(), estimate.height());
+            const Image up_input = resize_bilinear(inputs[l + 1], estimate.width(), estimate.height());
+            for (std::size_t i = 0; i < estimate.values().size(); ++i)
+                estimate.values()[i] += up_result.values()[i] - up_input.values()[i];
+            normalize_vectors(estimate);
+            LevelSolver solver(estimate, masks[l], variants, int(l), patch);
+            field = solver.upsampled_field(field, coarse_width, coarse_height, mix_seed(seed, item, level_stage + 1023));
+        }
+        const std::vector<float> exemplar_tilts = sorted_tilts(variants, l);
+        for (int em = 0; em < m_options.em_iterations; ++em) {
+            if (m_options.match_tilt_histogram) match_tilt_histogram(estimate, masks[l], exemplar_tilts);
+            LevelSolver solver(estimate, masks[l], variants, int(l), patch);
+            // Distinct streams per (level, EM round, search round): search_iterations <= 16 < 32.
+            const std::uint64_t stage = level_stage + std::uint64_t(em) * 32;
+            if (field.empty())
+                field = solver.random_field(mix_seed(seed, item, stage));
+            else
+                solver.refresh(field);
+            for (int s = 0; s < m_options.search_iterations; ++s) {
+                const int jump = 1 << std::max(0, m_options.search_iterations - 1 - s);
+                field = solver.search_round(field, jump, mix_seed(seed, item, stage + 1 + std::uint64_t(s)));
+            }
+            estimate = solver.vote(field);
+        }
+        if (m_options.match_tilt_histogram) match_tilt_histogram(estimate, masks[l], exemplar_tilts);
+        coarse_width = estimate.width();
+        coarse_height = estimate.height();
+        previous_result = estimate;
+    }
+    return estimate;
 }
 
 GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request) {
@@ -454,104 +638,125 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
     if (request.kind != GuidanceKind::Tactile)
         throw_error(
             "{} handles tactile requests only, got a {} request", where, guidance_kind_name(request.kind));
-    if (m_variants.empty()) throw_error("{}: no exemplars (set \"exemplars\" in its config)", where);
+    if (m_exemplars.empty()) throw_error("{}: no exemplars (set \"exemplars\" in its config)", where);
     validate_request(request, where);
 
-    // Levels usable by every variant and by the image (at least two patches wide).
-    const int patch = m_options.patch_size;
-    std::size_t levels = std::size_t(m_options.levels);
-    for (const Variant& v : m_variants) levels = std::min(levels, v.levels.size());
-    {
-        int size = std::min(request.images[0].width(), request.images[0].height());
-        std::size_t fit = 1;
-        while (fit < levels && size / 2 >= 2 * patch) size /= 2, ++fit;
-        levels = fit;
-    }
+    const bool use_surface = m_options.orientation == Options::Orientation::Surface && !request.surface_normals.empty();
+    const float pixels_per_texel = m_options.exemplar_scale > 0.0f ? m_options.exemplar_scale
+                                   : request.pixels_per_texel > 0.0f ? request.pixels_per_texel
+                                                                     : 1.0f;
+    const int width = request.images[0].width(), height = request.images[0].height();
+    const WorkingScale scale = working_scale(pixels_per_texel, width, height, m_options.patch_size);
+    const bool shrink = scale.width != width || scale.height != height;
 
     GuidanceResult result;
     for (std::size_t item = 0; item < request.images.size(); ++item) {
-        std::vector<Image> inputs{request.images[item]};
-        std::vector<Image> masks{request.masks[item]};
-        for (std::size_t l = 1; l < levels; ++l) {
-            Image n, m;
-            downsample_weighted(inputs.back(), masks.back(), n, m);
-            inputs.push_back(std::move(n));
-            masks.push_back(std::move(m));
-        }
-
-        std::vector<Match> field;
-        Image previous_result, previous_input;
-        int previous_width = 0, previous_height = 0;
-        for (std::size_t l = levels; l-- > 0;) {
-            // Starting estimate: the input at this level plus the change made at the coarser level.
-            Image estimate = inputs[l];
-            if (!previous_result.empty()) {
-                const Image up_result = resize_bilinear(previous_result, estimate.width(), estimate.height());
-                const Image up_input = resize_bilinear(previous_input, estimate.width(), estimate.height());
-                for (std::size_t i = 0; i < estimate.values().size(); ++i)
-                    estimate.values()[i] += up_result.values()[i] - up_input.values()[i];
-                for (std::size_t p = 0; p < estimate.pixel_count(); ++p)
-                    if (masks[l].data()[p] > 0.0f) {
-                        float* v = estimate.data() + 3 * p;
-                        const Vec3f n = safe_normalize(Vec3f(v[0], v[1], v[2]));
-                        v[0] = n.x, v[1] = n.y, v[2] = n.z;
-                    }
-            }
-            for (int em = 0; em < m_options.em_iterations; ++em) {
-                LevelSolver solver(estimate, masks[l], m_variants, int(l), patch);
-                // Distinct streams per (level, EM round, search round): search_iterations <= 16 < 32.
-                const std::uint64_t stage = std::uint64_t(l) * 1024 + std::uint64_t(em) * 32;
-                if (field.empty())
-                    field = solver.random_field(mix_seed(request.seed, item, stage));
-                else if (em == 0)
-                    field = solver.upsampled_field(
-                        field, previous_width, previous_height, mix_seed(request.seed, item, stage));
-                else
-                    solver.refresh(field);
-                for (int s = 0; s < m_options.search_iterations; ++s) {
-                    const int jump = 1 << std::max(0, m_options.search_iterations - 1 - s);
-                    field = solver.search_round(
-                        field, jump, mix_seed(request.seed, item, stage + 1 + std::uint64_t(s)));
-                }
-                estimate = solver.vote(field);
-            }
-            previous_result = std::move(estimate);
-            previous_input = inputs[l];
-            previous_width = previous_result.width();
-            previous_height = previous_result.height();
-        }
-
-        // Foreground: coverage-weighted unit normals, as the renders are; background: the input.
-        Image out = request.images[item];
         const Image& mask = request.masks[item];
+        // The relief on its own: each normal turned by the rotation that stands its surface
+        // normal upright, so the surface's curvature does not count as texture.
+        Image detail = request.images[item];
+        if (use_surface) {
+            const Image& base = request.surface_normals[item];
+            for (std::size_t p = 0; p < detail.pixel_count(); ++p) {
+                if (mask.data()[p] <= 0.0f) continue;
+                float* n = detail.data() + 3 * p;
+                const float* a = base.data() + 3 * p;
+                const Vec3f d = shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), safe_normalize(Vec3f(n[0], n[1], n[2])), false);
+                n[0] = d.x, n[1] = d.y, n[2] = d.z;
+            }
+        }
+        Image work = detail, work_mask = mask;
+        if (shrink) {
+            work = resize_bilinear(gaussian_blur_masked(detail, mask, 0.5f * float(width) / float(scale.width)),
+                                   scale.width, scale.height);
+            work_mask = resize_bilinear(gaussian_blur_masked(mask, Image(), 0.5f * float(width) / float(scale.width)),
+                                        scale.width, scale.height);
+            normalize_vectors(work);
+        }
+
+        std::vector<Variant> oriented;
+        if (use_surface) oriented = surface_variants(request, item, scale.exemplar_factor);
+        const std::vector<Variant>& variants = use_surface ? oriented : search_variants(scale.exemplar_factor);
+        Image refined = synthesize(work, work_mask, variants, request.seed, item);
+
+        if (shrink) {
+            // Back to full size as a change: the image keeps its own detail finer than the
+            // working copy resolves, and gains the exemplar's structure at the texel scale.
+            Image change = refined;
+            for (std::size_t i = 0; i < change.values().size(); ++i) change.values()[i] -= work.values()[i];
+            const Image up = resize_bilinear(change, width, height);
+            refined = detail;
+            for (std::size_t i = 0; i < refined.values().size(); ++i) refined.values()[i] += up.values()[i];
+        }
+        // Foreground: unit normals (stood back on their surface) times coverage, as the renders
+        // are; background: the input.
+        Image out = request.images[item];
         for (std::size_t p = 0; p < out.pixel_count(); ++p) {
             const float m = mask.data()[p];
             if (m <= 0.0f) continue;
-            for (int c = 0; c < 3; ++c)
-                out.data()[3 * p + std::size_t(c)] = m * previous_result.data()[3 * p + std::size_t(c)];
+            const float* r = refined.data() + 3 * p;
+            Vec3f n = safe_normalize(Vec3f(r[0], r[1], r[2]));
+            if (use_surface) {
+                const float* a = request.surface_normals[item].data() + 3 * p;
+                n = safe_normalize(shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), n, true));
+            }
+            float* o = out.data() + 3 * p;
+            o[0] = m * n.x, o[1] = m * n.y, o[2] = m * n.z;
         }
         result.refined.push_back(std::move(out));
     }
     return result;
 }
 
+std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surface_variants(
+    const GuidanceRequest& request, std::size_t item, float factor) const {
+    // The map's orientation in the image: the coverage-weighted mean of the stood-up tangents
+    // (u axis) and the majority handedness.
+    const Image& mask = request.masks[item];
+    const Image& base = request.surface_normals[item];
+    const Image& tangents = request.surface_tangents[item];
+    Vec3f mean_tangent;
+    double handedness = 0.0;
+    for (std::size_t p = 0; p < mask.pixel_count(); ++p) {
+        const float m = mask.data()[p];
+        if (m <= 0.0f) continue;
+        const float* a = base.data() + 3 * p;
+        const float* t = tangents.data() + 4 * p;
+        mean_tangent += shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), Vec3f(t[0], t[1], t[2]), false) * m;
+        handedness += double(m) * double(t[3]);
+    }
+    float angle = std::atan2(mean_tangent.y, mean_tangent.x);
+    // Within 0.06 degrees of a quarter turn: take the quarter turn, which moves texels exactly
+    // instead of resampling (and cropping) the exemplar for an invisible difference.
+    const float quarter = std::round(angle / (0.5f * kPi)) * 0.5f * kPi;
+    if (std::abs(angle - quarter) < 1e-3f) angle = quarter;
+    std::vector<Variant> variants;
+    for (const Image& exemplar : m_exemplars) {
+        Image scaled = scale_normal_map(exemplar, Image(), factor);
+        if (handedness < 0.0) scaled = mirror_normal_map(scaled);
+        variants.push_back(build_variant(rotate_normal_map(scaled, angle), m_options.levels, m_options.patch_size));
+    }
+    check_variants(variants, factor);
+    return variants;
+}
+
 double ExemplarPatchMatchBackend::mean_nearest_patch_distance(const Image& normals, const Image& mask) const {
-    TDF_CHECK(!m_variants.empty());
+    TDF_CHECK(!m_search_variants.empty());
     TDF_CHECK_EQ(normals.channels(), 3);
     const int r = m_options.patch_size / 2;
     const int w = normals.width(), h = normals.height();
     // Brute force over every variant position; per-row partial sums reduced in row order.
     std::vector<double> row_sum(std::size_t(h), 0.0);
     std::vector<std::size_t> row_count(std::size_t(h), 0);
-    LevelSolver solver(normals, mask, m_variants, 0, m_options.patch_size);
+    LevelSolver solver(normals, mask, m_search_variants, 0, m_options.patch_size);
     parallel_for(std::size_t(h), 1, [&](std::size_t y0, std::size_t y1) {
         for (int y = int(y0); y < int(y1); ++y) {
             if (y < r || y >= h - r) continue;
             for (int x = r; x < w - r; ++x) {
                 if (mask.at(x, y, 0) < 0.5f) continue;
                 Match best;
-                for (int v = 0; v < int(m_variants.size()); ++v) {
-                    const Image& e = m_variants[std::size_t(v)].levels[0];
+                for (int v = 0; v < int(m_search_variants.size()); ++v) {
+                    const Image& e = m_search_variants[std::size_t(v)].levels[0];
                     for (int ey = r; ey < e.height() - r; ++ey)
                         for (int ex = r; ex < e.width() - r; ++ex) {
                             const Match candidate{v, ex, ey, 0.0f};

@@ -133,6 +133,7 @@ Json write_guidance_request(const std::string& folder, const GuidanceRequest& re
     json["denoise_fraction"] = denoise_fraction(request.strength);
     json["iteration"] = request.iteration;
     json["seed"] = request.seed;
+    if (!visual) json["pixels_per_texel"] = request.pixels_per_texel;
     json["width"] = request.images[0].width();
     json["height"] = request.images[0].height();
     json["count"] = request.images.size();

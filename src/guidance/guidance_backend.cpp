@@ -6,6 +6,8 @@
 #include <tdf/guidance/external_backend.h>
 #include <tdf/guidance/relief_shading.h>
 
+#include <cmath>
+
 namespace tdf {
 
 GuidanceBackend::~GuidanceBackend() = default;
@@ -56,6 +58,22 @@ void validate_request(const GuidanceRequest& request, const std::string& where) 
                     guidance_kind_name(request.kind));
     for (std::size_t i = 0; i < controls; ++i)
         check_image(request.control[i], width, height, 3, where, "control image", i);
+    const std::size_t frames = request.surface_normals.size();
+    if (frames != request.surface_tangents.size() || (frames != 0 && frames != n) ||
+        (frames != 0 && request.kind != GuidanceKind::Tactile))
+        throw_error("{}: {} surface normal and {} surface tangent images for {} {} images (tactile requests "
+                    "have none or one of each per image)",
+                    where,
+                    frames,
+                    request.surface_tangents.size(),
+                    n,
+                    guidance_kind_name(request.kind));
+    for (std::size_t i = 0; i < frames; ++i) {
+        check_image(request.surface_normals[i], width, height, 3, where, "surface normal image", i);
+        check_image(request.surface_tangents[i], width, height, 4, where, "surface tangent image", i);
+    }
+    if (!(request.pixels_per_texel >= 0.0f && std::isfinite(request.pixels_per_texel)))
+        throw_error("{}: pixels_per_texel {} must be finite and >= 0", where, request.pixels_per_texel);
     if (!(request.strength >= 0.0 && request.strength <= 1.0))
         throw_error("{}: guidance strength {} is outside [0, 1]", where, request.strength);
 }

@@ -121,6 +121,8 @@ void run_optimize(const OptimizeOptions& options) {
         log_info("guidance: {}{}; the refinement phase uses the matching terms only for what is disabled",
                  visual ? "" : "visual off ", tactile ? "" : "tactile off");
     trainer.set_guidance(std::move(visual), std::move(tactile));
+    log_info("tactile patches: {:.2f} pixels per tactile map texel ({} px over {:.4g} mesh units)", trainer.pixels_per_texel(),
+             config.patch_resolution, 2.0 * double(config.patch_half_extent));
     if (config.save_guidance_frames) trainer.save_guidance_frames_to(options.output_dir + "/guidance_frames");
 
     const std::string checkpoint_path = options.output_dir + "/checkpoint.bin";

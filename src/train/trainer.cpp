@@ -14,6 +14,7 @@
 #include <tdf/render/shading.h>
 #include <tdf/render/trace.h>
 #include <tdf/scene/view_sampler.h>
+#include <tdf/tactile/relief_statistics.h>
 
 #include <chrono>
 #include <cmath>
@@ -68,8 +69,10 @@ struct Trainer::Batch {
     Image internal;            // one view at its internal (SSAA) size
 };
 
-float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int map_width_pixels,
-                                float mm_per_pixel) {
+namespace {
+
+/// sqrt(3-D area / UV area): the mean surface length of one UV unit.
+double mesh_units_per_uv_unit(const TriangleMesh& mesh) {
     double area_3d = 0, area_uv = 0;
     for (std::size_t f = 0; f < mesh.triangles.size() && mesh.has_uvs(); ++f) {
         const Vec3i& t = mesh.triangles[f];
@@ -80,12 +83,32 @@ float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int
                                                    mesh.uvs[std::size_t(u.z)]));
     }
     if (!(area_uv > 0) || !(area_3d > 0)) throw_error("{}: the UV atlas has no area", mesh.source_path);
-    const double uv_mm = std::sqrt(area_3d / area_uv) * double(mm_per_unit);
+    return std::sqrt(area_3d / area_uv);
+}
+
+}  // namespace
+
+float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int map_width_pixels,
+                                float mm_per_pixel) {
+    const double uv_mm = mesh_units_per_uv_unit(mesh) * double(mm_per_unit);
     return float(uv_mm / (double(map_width_pixels) * double(mm_per_pixel)));
 }
 
+float patch_pixels_per_texel(const TrainingTarget& target, const RunConfig& config) {
+    const MipTexture* map = target.material->tactile;
+    if (!map || map->empty() || !target.mesh->has_uvs()) return 0.0f;
+    const double texels_per_uv_unit = std::sqrt(double(map->width()) * double(map->height())) * target.tactile_layout.uv_scale;
+    const double units_per_texel = mesh_units_per_uv_unit(*target.mesh) / texels_per_uv_unit;
+    const double pixels_per_unit = double(config.patch_resolution) / (2.0 * double(config.patch_half_extent));
+    return float(units_per_texel * pixels_per_unit);
+}
+
 Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uint64_t seed)
-    : m_target(target), m_config(config), m_seed(seed), m_batch(std::make_unique<Batch>()) {
+    : m_target(target),
+      m_config(config),
+      m_seed(seed),
+      m_patch_pixels_per_texel(patch_pixels_per_texel(target, config)),
+      m_batch(std::make_unique<Batch>()) {
     TDF_CHECK(target.mesh && target.scene && target.material);
     const Bounds3 bounds = compute_bounds(*target.mesh);
     FieldConfig field_config;
@@ -224,15 +247,25 @@ LossRecord Trainer::step() {
         request.strength = kTactileGuidanceStrength;
         request.iteration = i;
         request.seed = m_seed ^ (std::uint64_t(i) << 20);
+        request.pixels_per_texel = m_patch_pixels_per_texel;
         for (int k = 0; k < P; ++k) {
-            Image normals(R, R, 3), mask(R, R, 1);
+            const GBuffer& g = b.gbuffers[std::size_t(k)];
+            const ViewRotation rot = view_rotation(b.cameras[std::size_t(k)]);
+            Image normals(R, R, 3), mask(R, R, 1), surface_normals(R, R, 3), surface_tangents(R, R, 4);
             const Vec3f* pred = b.patch_pred.data() + std::size_t(k) * patch_pixels;
             for (std::size_t p = 0; p < patch_pixels; ++p) {
                 std::copy(&pred[p].x, &pred[p].x + 3, normals.data() + 3 * p);
-                mask.data()[p] = b.gbuffers[std::size_t(k)].mask[p];
+                mask.data()[p] = g.mask[p];
+                if (g.mask[p] <= 0.0f) continue;
+                const Vec3f normal = view_space_normal(rot, g.normal[p]), tangent = view_space_normal(rot, g.tangent[p]);
+                std::copy(&normal.x, &normal.x + 3, surface_normals.data() + 3 * p);
+                std::copy(&tangent.x, &tangent.x + 3, surface_tangents.data() + 4 * p);
+                surface_tangents.data()[4 * p + 3] = g.handedness[p];
             }
             request.images.push_back(std::move(normals));
             request.masks.push_back(std::move(mask));
+            request.surface_normals.push_back(std::move(surface_normals));
+            request.surface_tangents.push_back(std::move(surface_tangents));
         }
         const GuidanceResult result = m_tactile_guidance->refine(request);
         validate_result(request, result, m_tactile_guidance->name());
@@ -515,19 +548,30 @@ QualityReport Trainer::evaluate_held_out() const {
 
     double cosine_sum = 0;
     std::size_t cosine_count = 0;
+    std::vector<Vec3f> learned_tangent, target_tangent;
     for (int k = 0; k < cfg.held_out_patches; ++k) {
         const Camera camera = held_out_patch(k);
         trace_and_evaluate(camera, g, outputs);
         const LearnedImages learned = learned_images(camera, g, outputs);
         const ViewRotation rot = view_rotation(camera);
+        std::size_t q = 0;
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] <= 0.0f) continue;
             const float* n = learned.view_normals.data() + 3 * p;
             cosine_sum += cosine_similarity({n[0], n[1], n[2]}, target_view_normal(m_target, g, p, rot));
             ++cosine_count;
+            learned_tangent.push_back(outputs[q++].normal);
+            target_tangent.push_back(safe_normalize(sample_tactile(*m_target.material, g, p, -1, m_target.tactile_layout)));
         }
     }
     report.tactile_mean_cosine = cosine_count ? cosine_sum / double(cosine_count) : 0.0;
+    if (m_target.material->tactile) {
+        const std::vector<double> exemplar = tilt_histogram(m_target.material->tactile->level(0));
+        report.tactile_tilt_distance =
+            histogram_l1_distance(tilt_histogram(learned_tangent.data(), learned_tangent.size()), exemplar);
+        report.target_tilt_distance =
+            histogram_l1_distance(tilt_histogram(target_tangent.data(), target_tangent.size()), exemplar);
+    }
     report.patches = cfg.held_out_patches;
     return report;
 }
@@ -538,6 +582,8 @@ Json QualityReport::to_json() const {
             {"albedo_max_error", albedo_max_error},
             {"tactile_mean_cosine", tactile_mean_cosine},
             {"colour_geometry_correlation", colour_geometry_correlation},
+            {"tactile_tilt_distance", tactile_tilt_distance},
+            {"target_tilt_distance", target_tilt_distance},
             {"held_out_views", views},
             {"held_out_patches", patches}};
 }

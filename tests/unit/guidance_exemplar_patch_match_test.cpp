@@ -5,6 +5,7 @@
 #include <tdf/guidance/exemplar_patch_match.h>
 #include <tdf/tactile/tactile_map.h>
 #include <tdf/guidance/image_filters.h>
+#include <tdf/tactile/relief_statistics.h>
 
 #include "common/test_paths.h"
 
@@ -69,22 +70,10 @@ Image smooth_normals(int size, std::uint64_t seed) {
     return n;
 }
 
-/// L1 distance between the histograms (16 bins over [0, 60] degrees) of the normals' tilt from
-/// +z: a rotation-invariant statistic of the relief, independent of the patch search.
+/// L1 distance between the tilt histograms (relief_statistics.h): a rotation-invariant
+/// statistic of the relief, independent of the patch search.
 double tilt_histogram_distance(const Image& a, const Image& b) {
-    const auto histogram = [](const Image& image) {
-        std::vector<double> h(16, 0.0);
-        for (std::size_t p = 0; p < image.pixel_count(); ++p) {
-            const float z = std::clamp(image.data()[3 * p + 2], -1.0f, 1.0f);
-            const int bin = std::min(15, int(degrees(std::acos(z)) / 60.0f * 16.0f));
-            h[std::size_t(bin)] += 1.0 / double(image.pixel_count());
-        }
-        return h;
-    };
-    const auto ha = histogram(a), hb = histogram(b);
-    double d = 0.0;
-    for (std::size_t i = 0; i < ha.size(); ++i) d += std::abs(ha[i] - hb[i]);
-    return d;
+    return histogram_l1_distance(tilt_histogram(a), tilt_histogram(b));
 }
 
 GuidanceRequest tactile_request(const Image& normals, const Image& mask, std::uint64_t seed = 5) {
@@ -273,4 +262,157 @@ TEST(GuidanceExemplarPatchMatch, RealTactileSamplePullsSmoothNormalsTowardIt) {
 }
 
 }  // namespace
+}  // namespace tdf
+
+
+namespace tdf {
+namespace {
+
+/// Rodrigues rotation of v about the unit `axis` by `angle`.
+Vec3f rotate_about(Vec3f v, Vec3f axis, float angle) {
+    return v * std::cos(angle) + cross(axis, v) * std::sin(angle) + axis * (dot(axis, v) * (1.0f - std::cos(angle)));
+}
+
+/// A tactile request showing `detail` (tangent-space normals, u to the right) laid on a
+/// sphere cap seen from above: every normal and the tangent are tilted with the cap's surface
+/// normal, as the optimizer's patch renders are. Returns the request with its surface frames.
+GuidanceRequest curved_request(const Image& detail, float handedness) {
+    const int size = detail.width();
+    Image normals(size, size, 3), base(size, size, 3), tangents(size, size, 4);
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const float c = 0.5f * float(size - 1);
+            const Vec3f a = safe_normalize(Vec3f((float(x) - c) / 30.0f, (c - float(y)) / 30.0f, 1.0f));
+            const Vec3f axis = safe_normalize(cross(Vec3f(0, 0, 1), a));
+            const float angle = std::acos(std::clamp(a.z, -1.0f, 1.0f));
+            const float* d = detail.pixel(x, y);
+            set_normal(normals, x, y, rotate_about(Vec3f(d[0], d[1], d[2]), axis, angle));
+            set_normal(base, x, y, a);
+            const Vec3f t = rotate_about(Vec3f(1, 0, 0), axis, angle);
+            float* tp = tangents.pixel(x, y);
+            tp[0] = t.x, tp[1] = t.y, tp[2] = t.z, tp[3] = handedness;
+        }
+    GuidanceRequest r = tactile_request(normals, Image(size, size, 1, 1.0f));
+    r.surface_normals = {base};
+    r.surface_tangents = {tangents};
+    return r;
+}
+
+double max_abs_difference(const Image& a, const Image& b) {
+    double e = 0.0;
+    for (std::size_t i = 0; i < a.values().size(); ++i) e = std::max(e, double(std::abs(a.values()[i] - b.values()[i])));
+    return e;
+}
+
+/// Rows reversed and y negated: the map as a chart of handedness -1 shows it.
+Image mirrored(const Image& image) {
+    Image out(image.width(), image.height(), 3);
+    for (int y = 0; y < image.height(); ++y)
+        for (int x = 0; x < image.width(); ++x) {
+            const float* s = image.pixel(x, image.height() - 1 - y);
+            set_normal(out, x, y, Vec3f(s[0], -s[1], s[2]));
+        }
+    return out;
+}
+
+ExemplarPatchMatchBackend::Options exact_options() {
+    ExemplarPatchMatchBackend::Options o = small_options();
+    o.levels = 1;
+    o.search_iterations = 8;
+    o.match_tilt_histogram = false;  // a crop's histogram is not the whole exemplar's
+    return o;
+}
+
+}  // namespace
+
+TEST(GuidanceExemplarPatchMatch, SurfaceFramesSeparateTheReliefFromTheCurvature) {
+    const Image exemplar = bump_exemplar(48);
+    const Image detail = crop(exemplar, 7, 3, 24, 24);
+    ExemplarPatchMatchBackend backend(exact_options());
+    backend.set_exemplars({exemplar});
+
+    // With the frames the relief under the curvature is exemplar content: found exactly.
+    const GuidanceRequest request = curved_request(detail, 1.0f);
+    const double with_frames = max_abs_difference(backend.refine(request).refined[0], request.images[0]);
+    EXPECT_LT(with_frames, 2e-3);
+
+    // Without them the cap's tilt (up to 21 degrees) is taken for texture and replaced.
+    GuidanceRequest bare = request;
+    bare.surface_normals.clear();
+    bare.surface_tangents.clear();
+    const double without_frames = max_abs_difference(backend.refine(bare).refined[0], request.images[0]);
+    EXPECT_GT(without_frames, 0.1);
+    std::printf("curved exemplar crop: max error %.5f with surface frames, %.3f without\n", with_frames, without_frames);
+}
+
+TEST(GuidanceExemplarPatchMatch, SurfaceFramesGiveTheMapsTurnAndMirroring) {
+    // The bumps and the vertical ridge look the same mirrored; a diagonal ridge does not.
+    Image exemplar = bump_exemplar(48);
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x)
+            if ((x + y) % 16 < 3) set_normal(exemplar, x, y, Vec3f(0.6f, 0.6f, 1.0f));
+    ExemplarPatchMatchBackend backend(exact_options());
+    backend.set_exemplars({exemplar});
+
+    // A chart of handedness -1 shows the map mirrored; the frames say so, so it is found.
+    const GuidanceRequest request = curved_request(crop(mirrored(exemplar), 11, 5, 24, 24), -1.0f);
+    EXPECT_LT(max_abs_difference(backend.refine(request).refined[0], request.images[0]), 2e-3);
+    // Claiming handedness +1 for the same image makes it foreign content.
+    GuidanceRequest wrong = request;
+    for (std::size_t p = 0; p < wrong.surface_tangents[0].pixel_count(); ++p) wrong.surface_tangents[0].data()[4 * p + 3] = 1.0f;
+    EXPECT_GT(max_abs_difference(backend.refine(wrong).refined[0], request.images[0]), 0.05);
+}
+
+TEST(GuidanceExemplarPatchMatch, MagnifiedPatchesAreSearchedAsACoarserCopy) {
+    // The map magnified 8x, as the optimizer's patches see it: one texel spans 8 pixels.
+    const Image exemplar = bump_exemplar(48);
+    const Image magnified = resize_bilinear(crop(exemplar, 4, 4, 12, 12), 96, 96);
+    const Image mask(96, 96, 1, 1.0f);
+    ExemplarPatchMatchBackend::Options options = small_options();
+    options.levels = 1;
+    ExemplarPatchMatchBackend backend(options);
+    backend.set_exemplars({exemplar});
+
+    GuidanceRequest request = tactile_request(magnified, mask);
+    request.pixels_per_texel = 8.0f;
+    const Image refined = backend.refine(request).refined[0];
+    // Searched at the right scale the content is the exemplar's: the change stays small.
+    double mean_change = 0.0;
+    for (std::size_t i = 0; i < refined.values().size(); ++i) mean_change += std::abs(refined.values()[i] - magnified.values()[i]);
+    mean_change /= double(refined.values().size());
+    // At scale 1 the smooth magnified ramps match nothing in the exemplar and are rebuilt.
+    request.pixels_per_texel = 1.0f;
+    const Image unscaled = backend.refine(request).refined[0];
+    double mean_change_unscaled = 0.0;
+    for (std::size_t i = 0; i < unscaled.values().size(); ++i)
+        mean_change_unscaled += std::abs(unscaled.values()[i] - magnified.values()[i]);
+    mean_change_unscaled /= double(unscaled.values().size());
+    std::printf("8x magnified crop: mean change %.4f at pixels_per_texel 8, %.4f at 1\n", mean_change, mean_change_unscaled);
+    EXPECT_LT(mean_change, 0.5 * mean_change_unscaled);
+}
+
+TEST(GuidanceExemplarPatchMatch, ScaleAndOrientationOptions) {
+    using Options = ExemplarPatchMatchBackend::Options;
+    EXPECT_EQ(Options::from_json(Json::object()).exemplar_scale, 0.0f);  // auto
+    EXPECT_EQ(Options::from_json(Json{{"exemplar_scale", "auto"}}).exemplar_scale, 0.0f);
+    EXPECT_EQ(Options::from_json(Json{{"exemplar_scale", 2}}).exemplar_scale, 2.0f);
+    EXPECT_THROW(Options::from_json(Json{{"exemplar_scale", "big"}}), Error);
+    EXPECT_THROW(Options::from_json(Json{{"exemplar_scale", 0}}), Error);
+    EXPECT_EQ(Options::from_json(Json{{"orientation", "search"}}).orientation, Options::Orientation::Search);
+    EXPECT_THROW(Options::from_json(Json{{"orientation", "up"}}), Error);
+
+    // Frames must come one of each per image, of the image's size.
+    ExemplarPatchMatchBackend backend(small_options());
+    backend.set_exemplars({bump_exemplar(24)});
+    GuidanceRequest request = curved_request(crop(bump_exemplar(24), 0, 0, 16, 16), 1.0f);
+    request.surface_tangents.clear();
+    EXPECT_THROW(backend.refine(request), Error);
+    request = curved_request(crop(bump_exemplar(24), 0, 0, 16, 16), 1.0f);
+    request.surface_tangents[0] = Image(16, 16, 3);
+    EXPECT_THROW(backend.refine(request), Error);
+    request = curved_request(crop(bump_exemplar(24), 0, 0, 16, 16), 1.0f);
+    request.pixels_per_texel = -1.0f;
+    EXPECT_THROW(backend.refine(request), Error);
+}
+
 }  // namespace tdf

@@ -5,43 +5,50 @@
 /// the touched exemplars, so the learned normals are pulled toward the statistics of what was
 /// touched, which is the role TextureDreambooth plays in the reference (spec 5.5).
 ///
-/// Algorithm, per image of the request (parallel over pixels; deterministic for a seed and
-/// independent of the thread count):
-///  1. Pyramids: the image, its mask and every exemplar variant are box-downsampled `levels`
-///     times (coarsest first; levels whose images get smaller than two patches are dropped).
-///  2. At each level the starting estimate is the input at that level plus the change the coarser
-///     level made (Laplacian transfer), so the input's structure is kept and only its texture is
-///     replaced; the nearest-neighbour field (NNF) is initialised randomly at the coarsest level
-///     and upsampled from the coarser level afterwards.
-///  3. `em_iterations` times: PatchMatch (Jacobi-style, every pixel reads the previous NNF:
-///     propagation from neighbours at jump-flood offsets, then random search around the best
-///     match, `search_iterations` rounds) over the exemplar variants, minimising the mask-weighted
-///     sum of squared differences of the normal vectors over a `patch_size`^2 window; then
-///     voting: each pixel becomes the average of the exemplar pixels that the patches covering it
-///     propose, renormalized to unit length.
-///  4. Output: foreground pixels get mask * voted unit normal (the antialiased convention of the
-///     renders, spec 3.6); pixels with mask 0 keep the input (background).
+/// Per image of the request (parallel over pixels; deterministic for a seed and independent of
+/// the thread count):
+///  1. Relief: with the request's surface frames (GuidanceRequest::surface_normals/tangents,
+///     which tdf's optimizer provides), every normal is turned by the shortest rotation that
+///     stands its surface normal upright, so the surface's curvature across the patch is not
+///     mistaken for texture, and the exemplar is turned (and mirrored on charts of handedness
+///     -1) the way the map lies in this patch: one orientation, no rotation search. Without
+///     frames, or with `orientation: search`, the image is used as it is and the search runs
+///     over `rotations` in-plane rotations of every exemplar (multiples of 360/rotations
+///     degrees), each also row-flipped when `flip_rows` is set (the reference's upside-down
+///     patches, spec 13.13); each pixel's match picks its own variant.
+///  2. Scale: the exemplar is resampled so one of its texels spans as many pixels as the map's
+///     texels do in the image (`exemplar_scale: auto` takes GuidanceRequest::pixels_per_texel).
+///     Magnified more than 2x an exemplar's patches are smooth ramps that match anything, so
+///     beyond that the image is searched as a coarser copy (at least three patches wide) and
+///     the change the search makes there is added back to the full-size image.
+///  3. Synthesis (Kwatra et al.'s EM with a PatchMatch search and Kopf et al. 2007's histogram
+///     matching): pyramids of `levels` levels (levels smaller than two patches are dropped).
+///     The coarsest level starts from the image with a random nearest-neighbour field (NNF);
+///     each finer level starts from its input plus the change the coarser level made (Laplacian
+///     transfer), with the coarser matches carried down, so the relief stays where the image
+///     has it. Then `em_iterations` times: the steepness histogram is matched to the
+///     exemplar's (each foreground normal is ranked by tilt and takes the exemplar's tilt at
+///     that quantile, keeping its azimuth; without it the averaging of votes washes the relief
+///     out, which is what made this backend flatten learned normals before); PatchMatch
+///     (Jacobi-style, every pixel reads the previous NNF: propagation at jump-flood offsets,
+///     then random search around the best match, `search_iterations` rounds) minimising the
+///     mask-weighted sum of squared differences of the normal vectors over a `patch_size`^2
+///     window; voting: each pixel becomes the unit-length average of what the patches covering
+///     it propose. The histogram is matched once more after the last vote.
+///  4. Output: foreground pixels get mask * refined unit normal (turned back onto the surface;
+///     the renders' antialiased convention, spec 3.6); pixels with mask 0 keep the input.
 ///
-/// Rotation: a rendered patch shows VIEW-space normals from an orthographic camera along the
-/// surface normal, i.e. tangent space up to an unknown in-plane rotation (the patch camera's
-/// roll) and, in the reference, a vertical flip of the rows that leaves the vectors unchanged
-/// (spec 13.13). The search therefore runs over exemplar variants: `rotations` in-plane rotations
-/// (multiples of 360/rotations degrees; the image is resampled bilinearly and the (x, y)
-/// components of every normal are rotated with it; non-multiples of 90 degrees are cropped to the
-/// largest axis-aligned square inside the rotated exemplar), each also with rows flipped when
-/// `flip_rows` is set. Each pixel's match picks its own variant.
-///
-/// Limitation: the target keeps the input's structure at every scale (step 2), so the backend
+/// The coarsest level keeps the image's relief at the scale of a few patches, so the backend
 /// sharpens and re-textures relief that is there (as after the reference's 150 iterations of
 /// tactile matching) but does not create bumps on a flat input; a diffusion model with noise can.
 ///
 /// The search is approximate (PatchMatch); content that exists in an exemplar variant is found
-/// exactly (tested with 90-degree rotated crops). Cost grows with the image's pixels, not with the
-/// exemplar's size: about 0.4 s CPU for a 256x256 patch and 1.8 s for 512x512 with the defaults
-/// (README "Guidance backends"). Memory: every variant pyramid is kept, about
-/// 16 bytes x exemplar pixels x rotations x (flip_rows ? 2 : 1).
+/// exactly (tested with 90-degree rotated crops). Cost grows with the working image's pixels, not
+/// with the exemplar's size (README "Guidance backends" gives the measured times). Memory: the
+/// search variants' pyramids, about 16 bytes x scaled exemplar pixels x variants.
 #include <tdf/guidance/guidance_backend.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -56,21 +63,30 @@ public:
         /// "exemplars": tangent-space normal maps (PNG: n = 2 * value - 1, alpha ignored, as
         /// the reference encodes them; EXR: raw vectors). OpenGL convention, green = up.
         std::vector<std::string> exemplar_files;
-        /// "exemplar_scale": resampling factor applied to the exemplars before the search, in
-        /// render pixels per exemplar pixel (2 = each exemplar pixel covers 2x2 render pixels).
-        float exemplar_scale = 1.0f;
+        /// "exemplar_scale": render pixels per exemplar pixel, or "auto" (stored as 0, the
+        /// default): the request's pixels_per_texel, 1 when the request does not say. A number
+        /// in [0.125, 8] fixes it.
+        float exemplar_scale = 0.0f;
+        /// "orientation": "surface" (default) uses the request's surface frames when present;
+        /// "search" always searches the rotations below.
+        enum class Orientation { Surface, Search };
+        Orientation orientation = Orientation::Surface;
         /// "patch_size": odd window side in pixels (3..15).
-        int patch_size = 7;
+        int patch_size = 5;
         /// "levels": pyramid levels (1 = finest only).
-        int levels = 3;
-        /// "em_iterations": search + vote rounds per level.
-        int em_iterations = 2;
+        int levels = 2;
+        /// "em_iterations": search + vote rounds per level. More rounds re-synthesise more of the
+        /// image, which moves the target away from where the learned relief is: inside the
+        /// optimizer one round pulls the statistics toward the exemplar best (README).
+        int em_iterations = 1;
         /// "search_iterations": PatchMatch propagation + random-search rounds per search.
-        int search_iterations = 4;
-        /// "rotations": in-plane rotations searched: 1, 2, 4 or 8 (every 360/rotations degrees).
+        int search_iterations = 8;
+        /// "rotations": in-plane rotations searched without surface frames: 1, 2, 4 or 8.
         int rotations = 4;
-        /// "flip_rows": also search the row-flipped variants (spec 13.13).
+        /// "flip_rows": also search the row-flipped variants (spec 13.13), without surface frames.
         bool flip_rows = true;
+        /// "match_tilt_histogram": match the steepness histogram to the exemplar's (step 3).
+        bool match_tilt_histogram = true;
 
         /// Reads the keys above; throws tdf::Error for unknown keys or bad values.
         static Options from_json(const Json& config);
@@ -81,10 +97,10 @@ public:
     ~ExemplarPatchMatchBackend() override;
 
     /// Replaces the exemplars: tangent-space normal maps, 3 channels in [-1, 1] (or 4, alpha
-    /// ignored). Builds the search variants and pyramids. Throws tdf::Error for exemplars
-    /// smaller than a patch at the coarsest level.
+    /// ignored). Throws tdf::Error for exemplars smaller than a patch (at the fixed
+    /// exemplar_scale, or at scale 1 for "auto").
     void set_exemplars(std::vector<Image> tangent_normals) override;
-    std::size_t exemplar_count() const { return m_exemplar_count; }
+    std::size_t exemplar_count() const { return m_exemplars.size(); }
 
     std::string name() const override { return kName; }
     bool supports(GuidanceKind kind) const override { return kind == GuidanceKind::Tactile; }
@@ -94,7 +110,8 @@ public:
 
     /// Mean over the foreground pixels of `normals` (mask >= 0.5, whole window inside the image)
     /// of the squared distance from the pixel's patch to its nearest exemplar patch, found by
-    /// brute force over every variant position. A statistic of how exemplar-like an image is;
+    /// brute force over every search variant position (at the scale of the last search, 1 by
+    /// default). A statistic of how exemplar-like an image is;
     /// cost O(pixels x exemplar pixels x variants), meant for small test images.
     double mean_nearest_patch_distance(const Image& normals, const Image& mask) const;
 
@@ -103,9 +120,21 @@ public:
     struct Variant;  // exemplar variant pyramid (defined in the .cpp)
 
 private:
+    /// The rotation (and flip) variants searched without surface frames, with the exemplars
+    /// resampled by `factor`; rebuilt only when the factor changes.
+    const std::vector<Variant>& search_variants(float factor);
+    /// One variant per exemplar, turned and mirrored as the map lies in image `item`.
+    std::vector<Variant> surface_variants(const GuidanceRequest& request, std::size_t item, float factor) const;
+    /// Throws tdf::Error when a variant is smaller than a patch.
+    void check_variants(const std::vector<Variant>& variants, float factor) const;
+    /// Steps 3 of the algorithm on one (working) image: the refined unit normals.
+    Image synthesize(const Image& input, const Image& mask, const std::vector<Variant>& variants,
+                     std::uint64_t seed, std::size_t item) const;
+
     Options m_options;
-    std::size_t m_exemplar_count = 0;
-    std::vector<Variant> m_variants;
+    std::vector<Image> m_exemplars;  ///< unit tangent-space normals, as given
+    std::vector<Variant> m_search_variants;
+    float m_search_factor = 0.0f;
 };
 
 

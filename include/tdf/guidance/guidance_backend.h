@@ -57,6 +57,20 @@ struct GuidanceRequest {
     std::vector<Image> control;
     /// N coverage masks, 1 channel in [0, 1]; 0 = background (spec 3.6 antialiased coverage).
     std::vector<Image> masks;
+    /// Tactile only, optional (empty = unknown; tdf's optimizer fills them): the surface under
+    /// the relief at every pixel, in the images' view space. `surface_normals`: N images of the
+    /// interpolated geometric normal (3 channels, unit, zero on the background);
+    /// `surface_tangents`: N images of the unit tangent (dP/du) in channels 0-2 and the chart's
+    /// handedness (+1 / -1, core/tangent_frame.h) in channel 3. With them a backend can separate
+    /// the tactile detail from the surface's curvature and knows how the tactile map is turned
+    /// (and whether it is mirrored) in each patch.
+    std::vector<Image> surface_normals;
+    std::vector<Image> surface_tangents;
+    /// Tactile only: how many image pixels one texel of the tactile map spans on the surface in
+    /// these renders (the patch window against the map's texel size on the atlas, a mean over
+    /// the mesh); 0 = unknown. The reference's 0.15-unit, 512-pixel patches magnify a
+    /// 1024-texel map over a unit-size atlas ~3.3x, a 256-texel one ~13x.
+    float pixels_per_texel = 0.0f;
     /// Text conditions (spec 5.7; tactile guidance in the reference uses "sks normal map" / "").
     std::string prompt;
     std::string negative_prompt;
@@ -84,7 +98,8 @@ struct GuidanceResult {
 
 /// Checks the request's shapes: N >= 1 images of one size with the channel counts documented
 /// above, N masks of that size with 1 channel, N controls for visual requests (none for tactile),
-/// finite values, strength in [0, 1]. Throws tdf::Error naming `where` and the image index.
+/// surface frames either absent or N of each (tactile only), finite values, strength in [0, 1],
+/// pixels_per_texel finite and >= 0. Throws tdf::Error naming `where` and the image index.
 void validate_request(const GuidanceRequest& request, const std::string& where);
 
 /// Checks a result against its request: N images, each of the input's size and channel count,

@@ -56,9 +56,7 @@ struct RunConfig {
     int turntable_resolution = 512;
 
     std::string guidance_visual = "relief_shading";          ///< guidance backend names
-    /// Off by default: measured inside the optimizer, exemplar_patch_match smooths the learned
-    /// relief instead of sharpening it (README "Guidance backends").
-    std::string guidance_tactile = "none";
+    std::string guidance_tactile = "exemplar_patch_match";
     Json guidance_config = Json::object();  ///< the raw "guidance" section for the backends
     bool save_guidance_frames = false;
 

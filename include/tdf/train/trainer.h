@@ -39,6 +39,12 @@ struct TrainingTarget {
 float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int map_width_pixels,
                                 float mm_per_pixel);
 
+/// How many patch pixels one texel of the tactile map spans on the surface: the patch window
+/// (patch_resolution pixels over 2 patch_half_extent units) against the map's mean texel size on
+/// the atlas (sqrt(3-D area / UV area) over sqrt(width x height) x uv_scale texels per UV unit).
+/// 0 without a tactile map or UVs. Tactile guidance requests carry it (GuidanceRequest).
+float patch_pixels_per_texel(const TrainingTarget& target, const RunConfig& config);
+
 /// Held-out quality after training (README "Measured").
 struct QualityReport {
     double albedo_psnr_foreground = 0;  ///< dB over covered pixels of the held-out views
@@ -48,6 +54,13 @@ struct QualityReport {
     /// Colour-geometry alignment of the learned albedo and normals (colour_geometry_correlation,
     /// mean over the held-out views): what visual guidance raises (issue 6).
     double colour_geometry_correlation = 0;
+    /// How exemplar-like the learned relief is, whatever its position (what tactile guidance
+    /// lowers, issue 6): L1 distance between the tilt histograms (relief_statistics.h) of the
+    /// learned tangent-space normals at the held-out patch hits and of the tactile map's texels.
+    /// 0 without a tactile map.
+    double tactile_tilt_distance = 0;
+    /// The same for the target normals at those hits: the floor that sampling leaves.
+    double target_tilt_distance = 0;
     int views = 0;
     int patches = 0;
     Json to_json() const;
@@ -99,6 +112,7 @@ public:
     /// Renders the current field from `camera` (spec 3.1-3.5 training shading).
     LearnedImages render_learned(const Camera& camera) const;
     const StageTimes& stage_times() const { return m_times; }
+    float pixels_per_texel() const { return m_patch_pixels_per_texel; }
 
 private:
     struct Batch;  // per-iteration buffers, allocated once (trainer.cpp)
@@ -109,6 +123,7 @@ private:
     const TrainingTarget m_target;
     const RunConfig m_config;
     const std::uint64_t m_seed;
+    const float m_patch_pixels_per_texel;
     std::unique_ptr<TextureField> m_field;
     std::unique_ptr<Adam> m_adam;
     std::unique_ptr<GuidanceBackend> m_visual_guidance;
