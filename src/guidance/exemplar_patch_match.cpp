@@ -392,14 +392,21 @@ Image mirror_normal_map(const Image& image) {
     return out;
 }
 
-/// Resizes by `factor` (unit vectors in, unit vectors out); shrinking is prefiltered with a
-/// Gaussian of half the shrink factor so the coarse copy does not alias.
-Image scale_normal_map(const Image& image, const Image& mask, float factor) {
+/// Resamples to width x height, `scale` being the size ratio: shrinking (scale < 1) is
+/// prefiltered with a mask-weighted Gaussian of sigma 0.5 / scale so the coarse copy does not
+/// alias.
+Image resample_prefiltered(const Image& image, const Image& mask, int width, int height, float scale) {
+    return resize_bilinear(scale < 1.0f ? gaussian_blur_masked(image, mask, 0.5f / scale) : image, width, height);
+}
+
+/// Resizes by `factor` (unit vectors in, unit vectors out).
+Image scale_normal_map(const Image& image, float factor) {
     if (factor == 1.0f) return image;
-    const Image source = factor < 1.0f ? gaussian_blur_masked(image, mask, 0.5f / factor) : image;
-    Image out = resize_bilinear(source,
-                                std::max(1, int(std::lround(float(image.width()) * factor))),
-                                std::max(1, int(std::lround(float(image.height()) * factor))));
+    Image out = resample_prefiltered(image,
+                                     Image(),
+                                     std::max(1, int(std::lround(float(image.width()) * factor))),
+                                     std::max(1, int(std::lround(float(image.height()) * factor))),
+                                     factor);
     normalize_vectors(out);
     return out;
 }
@@ -532,17 +539,25 @@ void ExemplarPatchMatchBackend::set_exemplars(std::vector<Image> tangent_normals
         normalize_vectors(exemplar);
     }
     m_exemplars = std::move(tangent_normals);
+    m_scaled_exemplars.clear();
     m_search_variants.clear();
-    m_search_factor = 0.0f;
     // Fail now, not at the first refinement, when the exemplars cannot hold a patch.
     search_variants(m_options.exemplar_scale > 0.0f ? m_options.exemplar_scale : 1.0f);
+}
+
+const std::vector<Image>& ExemplarPatchMatchBackend::scaled_exemplars(float factor) {
+    if (factor != m_scaled_factor || m_scaled_exemplars.empty()) {
+        m_scaled_exemplars.clear();
+        for (const Image& exemplar : m_exemplars) m_scaled_exemplars.push_back(scale_normal_map(exemplar, factor));
+        m_scaled_factor = factor;
+    }
+    return m_scaled_exemplars;
 }
 
 const std::vector<ExemplarPatchMatchBackend::Variant>& ExemplarPatchMatchBackend::search_variants(float factor) {
     if (factor == m_search_factor && !m_search_variants.empty()) return m_search_variants;
     std::vector<Variant> variants;
-    for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
-        const Image exemplar = scale_normal_map(m_exemplars[i], Image(), factor);
+    for (const Image& exemplar : scaled_exemplars(factor)) {
         for (int r = 0; r < m_options.rotations; ++r) {
             const Image rotated = rotate_normal_map(exemplar, 2.0f * kPi * float(r) / float(m_options.rotations));
             for (int flip = 0; flip < (m_options.flip_rows ? 2 : 1); ++flip)
@@ -667,10 +682,9 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
         }
         Image work = detail, work_mask = mask;
         if (shrink) {
-            work = resize_bilinear(gaussian_blur_masked(detail, mask, 0.5f * float(width) / float(scale.width)),
-                                   scale.width, scale.height);
-            work_mask = resize_bilinear(gaussian_blur_masked(mask, Image(), 0.5f * float(width) / float(scale.width)),
-                                        scale.width, scale.height);
+            const float ratio = float(scale.width) / float(width);
+            work = resample_prefiltered(detail, mask, scale.width, scale.height, ratio);
+            work_mask = resample_prefiltered(mask, Image(), scale.width, scale.height, ratio);
             normalize_vectors(work);
         }
 
@@ -709,7 +723,7 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
 }
 
 std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surface_variants(
-    const GuidanceRequest& request, std::size_t item, float factor) const {
+    const GuidanceRequest& request, std::size_t item, float factor) {
     // The map's orientation in the image: the coverage-weighted mean of the stood-up tangents
     // (u axis) and the majority handedness.
     const Image& mask = request.masks[item];
@@ -731,10 +745,9 @@ std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surfa
     const float quarter = std::round(angle / (0.5f * kPi)) * 0.5f * kPi;
     if (std::abs(angle - quarter) < 1e-3f) angle = quarter;
     std::vector<Variant> variants;
-    for (const Image& exemplar : m_exemplars) {
-        Image scaled = scale_normal_map(exemplar, Image(), factor);
-        if (handedness < 0.0) scaled = mirror_normal_map(scaled);
-        variants.push_back(build_variant(rotate_normal_map(scaled, angle), m_options.levels, m_options.patch_size));
+    for (const Image& scaled : scaled_exemplars(factor)) {
+        const Image rotated = rotate_normal_map(handedness < 0.0 ? mirror_normal_map(scaled) : scaled, angle);
+        variants.push_back(build_variant(rotated, m_options.levels, m_options.patch_size));
     }
     check_variants(variants, factor);
     return variants;

@@ -38,10 +38,18 @@ ViewRotation view_rotation(const Camera& c) { return {c.right, c.up, c.back}; }
 TangentFrame frame_at(const GBuffer& g, std::size_t i) { return {g.tangent[i], g.normal[i], g.handedness[i]}; }
 
 // The target tactile normal of a hit pixel as the training renderer builds it: sampled over the
-// whole pyramid, renormalised (spec 3.1 step 5), composed with the frame, in view space.
+// whole pyramid, renormalised (spec 3.1 step 5), in tangent space ...
+Vec3f target_tangent_normal(const TrainingTarget& t, const GBuffer& g, std::size_t i) {
+    return safe_normalize(sample_tactile(*t.material, g, i, -1, t.tactile_layout));
+}
+
+// ... and composed with the pixel's frame, in view space.
+Vec3f tangent_to_view(const GBuffer& g, std::size_t i, const ViewRotation& r, Vec3f tangent_normal) {
+    return view_space_normal(r, compose_shading_normal(frame_at(g, i), tangent_normal));
+}
+
 Vec3f target_view_normal(const TrainingTarget& t, const GBuffer& g, std::size_t i, const ViewRotation& r) {
-    const Vec3f p = safe_normalize(sample_tactile(*t.material, g, i, -1, t.tactile_layout));
-    return view_space_normal(r, compose_shading_normal(frame_at(g, i), p));
+    return tangent_to_view(g, i, r, target_tangent_normal(t, g, i));
 }
 
 void copy_into(const Image& image, float* out) { std::copy(image.values().begin(), image.values().end(), out); }
@@ -230,7 +238,7 @@ LossRecord Trainer::step() {
                     pred[p] = target[p] = Vec3f{};
                     continue;
                 }
-                pred[p] = view_space_normal(rot, compose_shading_normal(frame_at(g, p), b.outputs[std::size_t(q)].normal));
+                pred[p] = tangent_to_view(g, p, rot, b.outputs[std::size_t(q)].normal);
                 target[p] = target_view_normal(m_target, g, p, rot);
             }
         });
@@ -352,7 +360,7 @@ LossRecord Trainer::step() {
             for (std::size_t p = 0; p < g.pixel_count(); ++p) {
                 const int q = point_of[p];
                 if (q < 0) continue;
-                const Vec3f n_v = view_space_normal(rot, compose_shading_normal(frame_at(g, p), b.outputs[std::size_t(q)].normal));
+                const Vec3f n_v = tangent_to_view(g, p, rot, b.outputs[std::size_t(q)].normal);
                 std::copy(&n_v.x, &n_v.x + 3, normals_internal.data() + 3 * p);
                 mask_internal.data()[p] = 1.0f;
             }
@@ -494,7 +502,7 @@ LearnedImages learned_images(const Camera& camera, const GBuffer& g, const std::
     for (std::size_t p = 0; p < g.pixel_count(); ++p) {
         if (g.mask[p] <= 0.0f) continue;
         const FieldOutputs& out = outputs[q++];
-        const Vec3f n_v = view_space_normal(rot, compose_shading_normal(frame_at(g, p), out.normal));
+        const Vec3f n_v = tangent_to_view(g, p, rot, out.normal);
         std::copy(&out.albedo.x, &out.albedo.x + 3, images.albedo.data() + 3 * p);
         std::copy(&n_v.x, &n_v.x + 3, images.view_normals.data() + 3 * p);
         images.mask.data()[p] = 1.0f;
@@ -558,10 +566,11 @@ QualityReport Trainer::evaluate_held_out() const {
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] <= 0.0f) continue;
             const float* n = learned.view_normals.data() + 3 * p;
-            cosine_sum += cosine_similarity({n[0], n[1], n[2]}, target_view_normal(m_target, g, p, rot));
+            const Vec3f target = target_tangent_normal(m_target, g, p);
+            cosine_sum += cosine_similarity({n[0], n[1], n[2]}, tangent_to_view(g, p, rot, target));
             ++cosine_count;
             learned_tangent.push_back(outputs[q++].normal);
-            target_tangent.push_back(safe_normalize(sample_tactile(*m_target.material, g, p, -1, m_target.tactile_layout)));
+            target_tangent.push_back(target);
         }
     }
     report.tactile_mean_cosine = cosine_count ? cosine_sum / double(cosine_count) : 0.0;

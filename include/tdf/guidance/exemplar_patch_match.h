@@ -120,11 +120,14 @@ public:
     struct Variant;  // exemplar variant pyramid (defined in the .cpp)
 
 private:
+    /// The exemplars resampled by `factor`; rebuilt only when the factor changes (a run's
+    /// requests all have the same pixels_per_texel).
+    const std::vector<Image>& scaled_exemplars(float factor);
     /// The rotation (and flip) variants searched without surface frames, with the exemplars
     /// resampled by `factor`; rebuilt only when the factor changes.
     const std::vector<Variant>& search_variants(float factor);
     /// One variant per exemplar, turned and mirrored as the map lies in image `item`.
-    std::vector<Variant> surface_variants(const GuidanceRequest& request, std::size_t item, float factor) const;
+    std::vector<Variant> surface_variants(const GuidanceRequest& request, std::size_t item, float factor);
     /// Throws tdf::Error when a variant is smaller than a patch.
     void check_variants(const std::vector<Variant>& variants, float factor) const;
     /// Steps 3 of the algorithm on one (working) image: the refined unit normals.
@@ -133,6 +136,8 @@ private:
 
     Options m_options;
     std::vector<Image> m_exemplars;  ///< unit tangent-space normals, as given
+    std::vector<Image> m_scaled_exemplars;
+    float m_scaled_factor = 0.0f;
     std::vector<Variant> m_search_variants;
     float m_search_factor = 0.0f;
 };
