@@ -9,10 +9,27 @@
 #include <tdf/core/image.h>
 #include <tdf/core/vec.h>
 
+#include <array>
 #include <string>
 #include <vector>
 
 namespace tdf {
+
+/// Where a run of faces came from in the input file: an OBJ object / group / material, or a glTF
+/// node + mesh + primitive + material. Exporters keep this structure (a GLB written back has the
+/// input's nodes and meshes) and multi-part texturing can take its parts from it.
+struct FaceGroup {
+    std::string object;    ///< OBJ `o` name, or the glTF node's name
+    std::string group;     ///< OBJ `g` name, or the glTF mesh's name
+    std::string material;  ///< OBJ `usemtl` name, or the glTF material's name
+    int gltf_node = -1;       ///< index in the input's `nodes`; -1 for OBJ/PLY
+    int gltf_mesh = -1;       ///< index in the input's `meshes`
+    int gltf_primitive = -1;  ///< index in that mesh's `primitives`
+    int gltf_material = -1;   ///< index in the input's `materials`
+    /// The node's world matrix (column-major, as glTF stores it) that the loader applied to the
+    /// positions; identity for OBJ/PLY. An exporter that writes the node back un-applies it.
+    std::array<double, 16> world_from_node{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+};
 
 struct TriangleMesh {
     std::vector<Vec3f> positions;     ///< per position vertex, scene units
@@ -25,6 +42,11 @@ struct TriangleMesh {
     /// unit tangent dP/du at corner k of face f, w = handedness (+1, or -1 on a mirrored chart).
     std::vector<Vec4f> tangents;
     std::vector<Vec3i> tangent_triangles;
+
+    /// Input structure: `face_group[f]` indexes `face_groups` for triangle f. Both empty when the
+    /// input had no structure (one group).
+    std::vector<FaceGroup> face_groups;
+    std::vector<int> face_group;
 
     Image albedo;              ///< base colour texture (RGB or RGBA), may be empty
     std::string albedo_path;   ///< where `albedo` came from, for messages and exports
