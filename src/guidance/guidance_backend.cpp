@@ -59,19 +59,26 @@ void validate_request(const GuidanceRequest& request, const std::string& where) 
     for (std::size_t i = 0; i < controls; ++i)
         check_image(request.control[i], width, height, 3, where, "control image", i);
     const std::size_t frames = request.surface_normals.size();
-    if (frames != request.surface_tangents.size() || (frames != 0 && frames != n) ||
-        (frames != 0 && request.kind != GuidanceKind::Tactile))
+    const std::size_t tangents = request.surface_tangents.size();
+    const bool frames_ok = request.kind == GuidanceKind::Tactile ? tangents == frames && (frames == 0 || frames == n)
+                                                                 : tangents == 0 && (frames == 0 || frames == n);
+    if (!frames_ok)
         throw_error("{}: {} surface normal and {} surface tangent images for {} {} images (tactile requests "
-                    "have none or one of each per image)",
+                    "have none or one of each per image, visual requests none or one surface normal image each)",
                     where,
                     frames,
                     request.surface_tangents.size(),
                     n,
                     guidance_kind_name(request.kind));
-    for (std::size_t i = 0; i < frames; ++i) {
-        check_image(request.surface_normals[i], width, height, 3, where, "surface normal image", i);
+    const std::size_t references = request.reference_images.size();
+    if ((references != 0 && references != n) || (references != 0 && request.kind != GuidanceKind::Visual))
+        throw_error("{}: {} reference images for {} {} images (visual requests have none or one per image)", where,
+                    references, n, guidance_kind_name(request.kind));
+    for (std::size_t i = 0; i < references; ++i)
+        check_image(request.reference_images[i], width, height, 3, where, "reference image", i);
+    for (std::size_t i = 0; i < frames; ++i) check_image(request.surface_normals[i], width, height, 3, where, "surface normal image", i);
+    for (std::size_t i = 0; i < tangents; ++i)
         check_image(request.surface_tangents[i], width, height, 4, where, "surface tangent image", i);
-    }
     if (!(request.pixels_per_texel >= 0.0f && std::isfinite(request.pixels_per_texel)))
         throw_error("{}: pixels_per_texel {} must be finite and >= 0", where, request.pixels_per_texel);
     if (!(request.strength >= 0.0 && request.strength <= 1.0))

@@ -23,6 +23,12 @@ ReliefShadingBackend::Options ReliefShadingBackend::Options::from_json(const Jso
     o.detail_sigma = reader.get<float>("detail_sigma", o.detail_sigma);
     o.curvature_sigma = reader.get<float>("curvature_sigma", o.curvature_sigma);
     o.curvature_percentile = reader.get<float>("curvature_percentile", o.curvature_percentile);
+    if (reader.has("anchor")) {
+        const std::string anchor = reader.require<std::string>("anchor");
+        if (anchor == "reference") o.anchor = Anchor::Reference;
+        else if (anchor == "current") o.anchor = Anchor::Current;
+        else throw_error("{}: anchor must be \"reference\" or \"current\", got '{}'", reader.where(), anchor);
+    }
     reader.check_all_read();
     if (!(o.contrast >= 0.0f && o.contrast <= 1.0f))
         throw_error("{}: contrast {} is outside [0, 1]", reader.where(), o.contrast);
@@ -71,8 +77,16 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
     for (std::size_t item = 0; item < request.images.size(); ++item) {
         const Image& colour = request.images[item];
         const Image& mask = request.masks[item];
-        const Image curvature =
-            normal_divergence(from_bae_control(request.control[item]), mask, m_options.curvature_sigma);
+        // The relief's own curvature: with the surface normals under it (GuidanceRequest::
+        // surface_normals) the mesh's curvature is taken out, so a curved but untouched surface
+        // (a sphere's flat-relief half) gets no shading, and the shading's contrast does not
+        // follow the colour's edges there.
+        Image normals = from_bae_control(request.control[item]);
+        if (!request.surface_normals.empty()) {
+            const Image& surface = request.surface_normals[item];
+            for (std::size_t i = 0; i < normals.values().size(); ++i) normals.values()[i] -= surface.values()[i];
+        }
+        const Image curvature = normal_divergence(normals, mask, m_options.curvature_sigma);
 
         // Normalise by a quantile over the curved foreground pixels only, so sparse relief on a
         // flat surface is not drowned by the zeros; a flat surface has none and stays unchanged.
@@ -88,7 +102,12 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
             scale = magnitudes[rank];
         }
 
-        const Image local_mean = gaussian_blur_masked(colour, mask, m_options.detail_sigma);
+        // With the input's render (GuidanceRequest::reference_images) the relief is added to what
+        // the input looks like, so repeated refinement converges to input + relief and never erases
+        // the input's own detail (faces, prints, logos); without it, to the current render.
+        const bool anchored = !request.reference_images.empty() && m_options.anchor == Options::Anchor::Reference;
+        const Image& base = anchored ? request.reference_images[item] : colour;
+        const Image local_mean = gaussian_blur_masked(base, mask, m_options.detail_sigma);
         // Relief detail, high-passed at the same scale so that it does not move the local mean.
         Image relief(colour.width(), colour.height(), 3);
         for (std::size_t p = 0; p < colour.pixel_count(); ++p) {
@@ -114,7 +133,7 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
                 const std::size_t i = 3 * p + std::size_t(c);
                 const float v = colour.data()[i], mean = local_mean.data()[i];
                 const float detail = relief.data()[i] - relief_mean.data()[i];
-                const float refined = mean + (1.0f - f) * (v - mean) + f * detail;
+                const float refined = anchored ? base.data()[i] + f * detail : mean + (1.0f - f) * (v - mean) + f * detail;
                 dst[c] = std::clamp(m * refined + (1.0f - m) * v, 0.0f, 1.0f);
             }
         }

@@ -56,10 +56,9 @@ inline int wrap_floor(float floored, int n) {
 
 }  // namespace
 
-Image downsample_box(const Image& src) {
-    const int w = std::max(1, src.width() / 2), h = std::max(1, src.height() / 2), c = src.channels();
+void downsample_box_into(const Image& src, Image& dst) {
+    const int w = dst.width(), h = dst.height(), c = src.channels();
     const BoxTaps tx = box_taps(src.width(), w), ty = box_taps(src.height(), h);
-    Image dst(w, h, c);
     parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
         for (std::size_t y = y0; y < y1; ++y) {
             for (int x = 0; x < w; ++x) {
@@ -75,7 +74,59 @@ Image downsample_box(const Image& src) {
             }
         }
     });
+}
+
+Image downsample_box(const Image& src) {
+    Image dst(std::max(1, src.width() / 2), std::max(1, src.height() / 2), src.channels());
+    downsample_box_into(src, dst);
     return dst;
+}
+
+void downsample_box_adjoint(const Image& coarse, Image& fine) {
+    const int w = coarse.width(), h = coarse.height(), c = coarse.channels();
+    TDF_CHECK(w == std::max(1, fine.width() / 2) && h == std::max(1, fine.height() / 2) && c == fine.channels());
+    const BoxTaps tx = box_taps(fine.width(), w), ty = box_taps(fine.height(), h);
+    // Fine rows receive from at most two coarse rows: parallel over coarse rows would race on the
+    // shared fine row of odd sizes, so each task owns a range of coarse rows and the rows it
+    // shares with its neighbour are written in a second, serial pass only when the size is odd.
+    const bool exact_halves = fine.width() == 2 * w && fine.height() == 2 * h;
+    const auto scatter_row = [&](std::size_t y) {
+        for (int x = 0; x < w; ++x) {
+            const float* g = coarse.pixel(x, int(y));
+            for (int j = 0; j < ty.count[y]; ++j) {
+                const float wy = ty.weights[y * BoxTaps::kMaxTaps + std::size_t(j)];
+                for (int i = 0; i < tx.count[std::size_t(x)]; ++i) {
+                    const float wxy = wy * tx.weights[std::size_t(x) * BoxTaps::kMaxTaps + std::size_t(i)];
+                    float* out = fine.pixel(tx.first[std::size_t(x)] + i, ty.first[y] + j);
+                    for (int k = 0; k < c; ++k) out[k] += wxy * g[k];
+                }
+            }
+        }
+    };
+    if (exact_halves) {
+        parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
+            for (std::size_t y = y0; y < y1; ++y) scatter_row(y);
+        });
+    } else {
+        for (std::size_t y = 0; y < std::size_t(h); ++y) scatter_row(y);
+    }
+}
+
+void MipTexture::assign(const Image& image) {
+    if (image.empty()) throw_error("cannot build a texture from an empty image");
+    if (image.channels() > kMaxTextureChannels)
+        throw_error("textures have at most {} channels, this image has {}", kMaxTextureChannels, image.channels());
+    if (m_levels.empty() || m_levels[0].width() != image.width() || m_levels[0].height() != image.height() ||
+        m_levels[0].channels() != image.channels()) {
+        *this = MipTexture(image);
+        return;
+    }
+    std::copy(image.values().begin(), image.values().end(), m_levels[0].values().begin());
+    for (std::size_t k = 1; k < m_levels.size(); ++k) {
+        Image& dst = m_levels[k];
+        std::fill(dst.values().begin(), dst.values().end(), 0.0f);
+        downsample_box_into(m_levels[k - 1], dst);
+    }
 }
 
 MipTexture::MipTexture(const Image& image) {
@@ -147,6 +198,65 @@ void MipTexture::sample_trilinear_at(Vec2f uv, float lod, float* out, int max_le
     float next[kMaxTextureChannels];
     sample_level(l0 + 1, uv, next);
     for (int k = 0; k < c; ++k) out[k] += frac * (next[k] - out[k]);
+}
+
+namespace {
+// The four bilinear taps of `level` at uv, exactly as sample_level addresses them.
+void add_level_taps(const Image& img, int level, Vec2f uv, float scale, TrilinearTaps& taps) {
+    const int w = img.width(), h = img.height();
+    const float x = uv.x * float(w) - 0.5f;
+    const float y = (1.f - uv.y) * float(h) - 0.5f;
+    const float fx0 = std::floor(x), fy0 = std::floor(y);
+    const float ax = x - fx0, ay = y - fy0;
+    const int x0 = wrap_floor(fx0, w), y0 = wrap_floor(fy0, h);
+    const int x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
+    const auto add = [&](int tx, int ty, float weight) {
+        const int k = taps.count++;
+        taps.level[k] = level;
+        taps.texel[k] = std::uint32_t(ty) * std::uint32_t(w) + std::uint32_t(tx);
+        taps.weight[k] = scale * weight;
+    };
+    add(x0, y0, (1 - ax) * (1 - ay));
+    add(x1, y0, ax * (1 - ay));
+    add(x0, y1, (1 - ax) * ay);
+    add(x1, y1, ax * ay);
+}
+}  // namespace
+
+void MipTexture::taps(Vec2f uv, float lod, int max_level, TrilinearTaps& taps) const {
+    const int top = max_level < 0 ? level_count() - 1 : std::min(max_level, level_count() - 1);
+    if (!(lod > 0.f)) lod = 0.f;
+    lod = std::min(lod, float(top));
+    const int l0 = int(lod);
+    const float frac = lod - float(l0);
+    taps.count = 0;
+    if (frac <= 0.f || l0 + 1 > top) {
+        add_level_taps(m_levels[std::size_t(l0)], l0, uv, 1.0f, taps);
+        return;
+    }
+    add_level_taps(m_levels[std::size_t(l0)], l0, uv, 1.0f - frac, taps);
+    add_level_taps(m_levels[std::size_t(l0 + 1)], l0 + 1, uv, frac, taps);
+}
+
+namespace {
+template <int C>
+inline void gather_taps(const std::vector<Image>& levels, const TrilinearTaps& taps, int channels, float* out) {
+    const int c = C > 0 ? C : channels;
+    float sum[kMaxTextureChannels] = {};
+    for (int t = 0; t < taps.count; ++t) {
+        const float* texel = levels[std::size_t(taps.level[t])].data() + std::size_t(taps.texel[t]) * std::size_t(c);
+        const float w = taps.weight[t];
+        for (int k = 0; k < c; ++k) sum[k] += w * texel[k];
+    }
+    for (int k = 0; k < c; ++k) out[k] = sum[k];
+}
+}  // namespace
+
+void MipTexture::gather(const TrilinearTaps& taps, float* out) const {
+    if (channels() == 3)
+        gather_taps<3>(m_levels, taps, 3, out);
+    else
+        gather_taps<0>(m_levels, taps, channels(), out);
 }
 
 }  // namespace tdf

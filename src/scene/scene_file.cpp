@@ -11,7 +11,7 @@ namespace tdf {
 namespace fs = std::filesystem;
 
 const std::vector<std::string>& foreign_scene_sections() {
-    static const std::vector<std::string> names = {"optimize", "tactile_layout", "guidance", "export"};
+    static const std::vector<std::string> names = {"optimize", "tactile_layout", "guidance", "export", "field", "schedule"};
     return names;
 }
 

@@ -17,6 +17,12 @@ namespace tdf {
 BakedMaps export_asset(const std::string& folder, const std::string& name, const std::string& postfix,
                        const TextureField& field, const TriangleMesh& mesh, const RunConfig& config) {
     BakedMaps maps = bake_field(field, mesh, config.texture_size, config.gutter);
+    write_asset(folder, name, postfix, maps, mesh, config);
+    return maps;
+}
+
+void write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config) {
     const std::string stem = name + postfix;
     const std::string base = folder + "/" + stem;
     // Matches reference: 8-bit maps by truncation (spec 1.5 step 6, 13.20); EXRs keep floats.
@@ -33,9 +39,8 @@ BakedMaps export_asset(const std::string& folder, const std::string& name, const
     material.normal_map = stem + "_tactile_normal.png";
     write_obj(base + ".obj", mesh, material);
     if (config.write_glb) write_glb(base + ".glb", mesh, &maps.albedo, &encoded_normals);
-    log_info("exported {}.obj (+ .mtl{}, maps {}x{})", base, config.write_glb ? ", .glb" : "", config.texture_size,
-             config.texture_size);
-    return maps;
+    log_info("exported {}.obj (+ .mtl{}, maps {}x{})", base, config.write_glb ? ", .glb" : "", maps.albedo.width(),
+             maps.albedo.height());
 }
 
 std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const EmbreeScene& scene,

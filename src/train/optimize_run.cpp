@@ -67,7 +67,8 @@ void run_optimize(const OptimizeOptions& options) {
     const SceneDescription description = load_scene(options.scene_path, options.overrides);
     const RunConfig config = RunConfig::from_json(section(description, "optimize"), section(description, "tactile_layout"),
                                                   section(description, "export"), section(description, "guidance"),
-                                                  options.scene_path);
+                                                  options.scene_path, section(description, "field"),
+                                                  section(description, "schedule"));
     if (description.tactile_images.empty())
         throw_error("{}: the scene names no tactile texture (tactile.images); `tdf optimize` needs one", options.scene_path);
     const std::string name =
@@ -146,7 +147,7 @@ void run_optimize(const OptimizeOptions& options) {
                             {"seed", description.seed},
                             {"config", resolved_text},
                             {"losses", log.to_json_lines()}};
-        save_field_checkpoint(checkpoint_path, trainer.field().parameters(), trainer.optimizer().state(), extra.dump());
+        save_field_checkpoint(checkpoint_path, trainer.parameters(), trainer.optimizer_state(), extra.dump());
     };
     const auto write_log = [&] {
         write_text_atomically(base + "_losses.jsonl", log.to_json_lines());
@@ -178,7 +179,7 @@ void run_optimize(const OptimizeOptions& options) {
         }
         if (done == config.init_iterations && config.init_iterations < config.iterations) {
             progress.finish();
-            export_asset(options.output_dir, name, "_initialized", trainer.field(), assets->mesh, config);
+            write_asset(options.output_dir, name, "_initialized", trainer.export_maps(), assets->mesh, config);
             // The quality measure is taken here, after the matching phase.
             const QualityReport matched = trainer.evaluate_held_out();
             write_text_atomically(base + "_initialized_report.json",
@@ -195,7 +196,8 @@ void run_optimize(const OptimizeOptions& options) {
         return;
     }
 
-    const BakedMaps maps = export_asset(options.output_dir, name, "", trainer.field(), assets->mesh, config);
+    const BakedMaps maps = trainer.export_maps();
+    write_asset(options.output_dir, name, "", maps, assets->mesh, config);
     const QualityReport quality = trainer.evaluate_held_out();
     write_turntable(options.output_dir, assets->mesh, *assets->scene, maps, config.turntable_views,
                     config.turntable_resolution);

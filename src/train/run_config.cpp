@@ -25,8 +25,38 @@ T choose(ConfigReader& reader, const std::string& key, T fallback,
 }  // namespace
 
 RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout, const Json& exporting,
-                               const Json& guidance, const std::string& source) {
+                               const Json& guidance, const std::string& source, const Json& field,
+                               const Json& schedule) {
     RunConfig c;
+    if (!schedule.is_null()) {
+        if (!schedule.is_string()) throw_error("{}: 'schedule' must be \"texture\" or \"reference\"", source);
+        c.schedule = schedule.get<std::string>();
+        if (c.schedule == "reference") {
+            c.evaluation = FieldEvaluation::Pixel;
+            c.iterations = 200;
+            c.init_iterations = 150;
+            c.visual_guidance_loss = "l1_structural";
+            c.weights.albedo_refine = 500.0f;
+            c.max_ssaa = 2.0f;
+        } else if (c.schedule != "texture") {
+            throw_error("{}: 'schedule' must be \"texture\" or \"reference\", got '{}'", source, c.schedule);
+        }
+    }
+    ConfigReader fr(field, source + ": field");
+    c.evaluation = choose(fr, "evaluation", c.evaluation,
+                          {{"texture", FieldEvaluation::Texture}, {"pixel", FieldEvaluation::Pixel}});
+    c.table_log2 = fr.get("table_log2", c.table_log2);
+    c.refine_grid = fr.get("refine_grid", c.refine_grid);
+    c.fit_texels = fr.get("fit_texels", c.fit_texels);
+    c.residual_optimizer = fr.get("residual_optimizer", c.residual_optimizer);
+    c.residual_step = fr.get("residual_step", c.residual_step);
+    fr.check_all_read();
+    if (c.evaluation == FieldEvaluation::Pixel && !schedule.is_string()) {
+        // Pixel evaluation without a schedule named: the reference's losses.
+        c.visual_guidance_loss = "l1_structural";
+        c.weights.albedo_refine = 500.0f;
+        c.max_ssaa = 2.0f;
+    }
     ConfigReader r(optimize, source + ": optimize");
     c.iterations = r.get("iterations", c.iterations);
     c.init_iterations = r.get("init_iterations", c.init_iterations);
@@ -42,6 +72,7 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.held_out_views = r.get("held_out_views", c.held_out_views);
     c.held_out_patches = r.get("held_out_patches", c.held_out_patches);
     c.field_raw_coordinates = r.get("field_raw_coordinates", c.field_raw_coordinates);
+    c.visual_guidance_loss = r.get("visual_guidance_loss", c.visual_guidance_loss);
     c.tactile_guidance_loss = choose(r, "tactile_guidance_loss", c.tactile_guidance_loss,
                                      {{"cosine", TactileGuidanceLoss::Cosine}, {"mse", TactileGuidanceLoss::Mse}});
     ConfigReader w = r.child("weights");
@@ -53,6 +84,8 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     lw.tactile_guidance = w.get("tactile_guidance", lw.tactile_guidance);
     lw.visual_guidance = w.get("visual_guidance", lw.visual_guidance);
     lw.visual_guidance_structural = w.get("visual_guidance_structural", lw.visual_guidance_structural);
+    lw.texture_albedo = w.get("texture_albedo", lw.texture_albedo);
+    lw.texture_tactile = w.get("texture_tactile", lw.texture_tactile);
     w.check_all_read();
     r.check_all_read();
 
@@ -130,9 +163,20 @@ void RunConfig::validate(const std::string& source) const {
     if (tactile_layout == TactileLayout::Physical && !(mm_per_unit > 0))
         throw_error("{}: tactile_layout.mode=physical needs tactile_layout.mm_per_unit > 0 (millimetres per mesh unit)",
                     source);
-    const float all_weights[] = {weights.albedo_init, weights.albedo_refine, weights.tactile_init,
-                                 weights.tactile_refine, weights.tactile_guidance, weights.visual_guidance,
-                                 weights.visual_guidance_structural};
+    if (residual_optimizer != "jacobi" && residual_optimizer != "adam")
+        throw_error("{}: field.residual_optimizer must be \"jacobi\" or \"adam\", got '{}'", source, residual_optimizer);
+    if (!(residual_step > 0.0f && residual_step <= 1.0f))
+        throw_error("{}: field.residual_step must be in (0, 1], got {}", source, residual_step);
+    if (visual_guidance_loss != "mse" && visual_guidance_loss != "l1_structural")
+        throw_error("{}: optimize.visual_guidance_loss must be \"mse\" or \"l1_structural\", got '{}'", source,
+                    visual_guidance_loss);
+    if (table_log2 < 10 || table_log2 > 24)
+        throw_error("{}: field.table_log2 must be in [10, 24], got {}", source, table_log2);
+    if (fit_texels < 1024 || fit_texels > (1 << 24))
+        throw_error("{}: field.fit_texels must be in [1024, 16777216], got {}", source, fit_texels);
+    const float all_weights[] = {weights.albedo_init,      weights.albedo_refine,    weights.tactile_init,
+                                 weights.tactile_refine,   weights.tactile_guidance, weights.visual_guidance,
+                                 weights.visual_guidance_structural, weights.texture_albedo, weights.texture_tactile};
     for (float v : all_weights)
         if (!(v >= 0.0f)) throw_error("{}: loss weights must be >= 0 and finite", source);
 }
@@ -155,6 +199,7 @@ Json RunConfig::to_json() const {
         {"held_out_patches", held_out_patches},
         {"field_raw_coordinates", field_raw_coordinates},
         {"tactile_guidance_loss", tactile_guidance_loss == TactileGuidanceLoss::Cosine ? "cosine" : "mse"},
+        {"visual_guidance_loss", visual_guidance_loss},
         {"weights",
          {{"albedo_init", weights.albedo_init},
           {"albedo_refine", weights.albedo_refine},
@@ -162,7 +207,16 @@ Json RunConfig::to_json() const {
           {"tactile_refine", weights.tactile_refine},
           {"tactile_guidance", weights.tactile_guidance},
           {"visual_guidance", weights.visual_guidance},
-          {"visual_guidance_structural", weights.visual_guidance_structural}}}};
+          {"visual_guidance_structural", weights.visual_guidance_structural},
+          {"texture_albedo", weights.texture_albedo},
+          {"texture_tactile", weights.texture_tactile}}}};
+    j["schedule"] = schedule;
+    j["field"] = {{"evaluation", evaluation == FieldEvaluation::Texture ? "texture" : "pixel"},
+                  {"table_log2", table_log2},
+                  {"refine_grid", refine_grid},
+                  {"fit_texels", fit_texels},
+                  {"residual_optimizer", residual_optimizer},
+                  {"residual_step", residual_step}};
     j["tactile_layout"] = {{"mode", tactile_layout == TactileLayout::Atlas ? "atlas" : "physical"},
                            {"mm_per_unit", mm_per_unit},
                            {"mm_per_pixel", tactile_mm_per_pixel}};

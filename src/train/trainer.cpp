@@ -12,6 +12,7 @@
 #include <tdf/loss/tactile_loss.h>
 #include <tdf/render/resample.h>
 #include <tdf/render/shading.h>
+#include <tdf/render/texture_gradient.h>
 #include <tdf/render/trace.h>
 #include <tdf/scene/view_sampler.h>
 #include <tdf/tactile/relief_statistics.h>
@@ -73,8 +74,23 @@ struct Trainer::Batch {
     std::vector<Vec3f> patch_pred, patch_target, patch_grad;
     // Visual images at the output size, B x S x S x 3 (interleaved, image after image).
     std::vector<float> albedo_pred, albedo_target, albedo_grad, lambertian, lambertian_grad;
+    std::vector<float> lambertian_target;  // the input's lambertian under the same light (relief anchor)
     std::vector<float> shade;  // per point: the lambertian shade of visual hits
     Image internal;            // one view at its internal (SSAA) size
+    // Which view and pixel each hit came from (texture evaluation looks the maps up there).
+    std::vector<std::uint32_t> hit_pixel;
+    std::vector<std::uint16_t> hit_view;
+    // Texture evaluation: each hit's lookup and its unnormalised normal; the map gradients.
+    std::vector<Vec2f> lookup_uv;
+    std::vector<float> lookup_lod;
+    std::vector<Vec3f> raw_normal;
+    // Per hit: the curvature of the loss with respect to the map value the hit reads, per channel
+    // (the Jacobi step's denominator; texture evaluation only).
+    std::vector<float> curvature;
+    std::size_t patch_hit_count = 0;  // hits of the patches come first
+    MipGradient albedo_gradient, normal_gradient;
+    std::vector<FieldOutputGrads> texel_grads;
+    std::vector<std::uint32_t> fit_texels;  // matching phase: the texels sampled this iteration
 };
 
 namespace {
@@ -121,11 +137,26 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
     const Bounds3 bounds = compute_bounds(*target.mesh);
     FieldConfig field_config;
     field_config.input = config.field_raw_coordinates ? FieldInput::RawWrapped : FieldInput::BoundingBox;
+    field_config.grid.log2_table_size = config.table_log2;
     m_field = std::make_unique<TextureField>(field_config, FieldDomain{bounds.lower, bounds.upper}, seed);
     AdamHyperparams hyper;
     hyper.learning_rate = config.learning_rate;
     m_adam = std::make_unique<Adam>(m_field->parameter_count(), hyper);
     m_gradient.assign(m_field->parameter_count(), 0.0f);
+    if (texture_space()) {
+        if (!target.mesh->has_uvs())
+            throw_error("{}: field.evaluation=texture needs a UV atlas (load the mesh with UVs or unwrap it)",
+                        target.mesh->source_path);
+        m_atlas = std::make_unique<TexelAtlas>(TexelAtlas::build(*target.mesh, config.texture_size));
+        m_albedo_target = tdf::albedo_target(*m_atlas, *target.material, *target.mesh);
+        m_tactile_target = tdf::tactile_target(*m_atlas, *target.material, target.tactile_layout);
+        m_albedo_target_texture = MipTexture(m_albedo_target);
+        m_maps = std::make_unique<LearnedMaps>(*m_atlas);
+        m_residual_adam = std::make_unique<Adam>(m_maps->residual().size(), hyper);
+        log_verbose("texture-space optimizer: {} of {} texels covered ({:.1f} %)", m_atlas->covered_count(),
+                    m_atlas->texel_count(), 100.0 * double(m_atlas->covered_count()) / double(m_atlas->texel_count()));
+        if (config.init_iterations == 0) prepare_maps();
+    }
 }
 
 Trainer::~Trainer() = default;
@@ -139,39 +170,234 @@ void Trainer::set_guidance(std::unique_ptr<GuidanceBackend> visual, std::unique_
     m_tactile_guidance = std::move(tactile);
 }
 
+std::vector<float> Trainer::parameters() const {
+    std::vector<float> all = m_field->parameters();
+    if (m_maps) all.insert(all.end(), m_maps->residual().begin(), m_maps->residual().end());
+    return all;
+}
+
+AdamState Trainer::optimizer_state() const {
+    AdamState state = m_adam->state();
+    if (m_residual_adam) {
+        const AdamState& r = m_residual_adam->state();
+        state.m.insert(state.m.end(), r.m.begin(), r.m.end());
+        state.v.insert(state.v.end(), r.v.begin(), r.v.end());
+    }
+    return state;
+}
+
 void Trainer::restore(int iteration, const std::vector<float>& parameters, const AdamState& adam) {
-    if (parameters.size() != m_field->parameter_count())
-        throw_error("checkpoint has {} field parameters, this configuration needs {}", parameters.size(),
-                    m_field->parameter_count());
-    m_field->parameters() = parameters;
-    m_adam->restore(adam);
+    const std::size_t field_count = m_field->parameter_count();
+    const std::size_t residual_count = m_maps ? m_maps->residual().size() : 0;
+    if (parameters.size() != field_count + residual_count || adam.m.size() != parameters.size() ||
+        adam.v.size() != parameters.size())
+        throw_error("checkpoint has {} parameters, this configuration needs {}", parameters.size(),
+                    field_count + residual_count);
+    const auto split = [&](const std::vector<float>& all, std::size_t begin, std::size_t count) {
+        return std::vector<float>(all.begin() + std::ptrdiff_t(begin), all.begin() + std::ptrdiff_t(begin + count));
+    };
+    m_field->parameters() = split(parameters, 0, field_count);
+    m_adam->restore(AdamState{split(adam.m, 0, field_count), split(adam.v, 0, field_count), adam.step});
     m_iteration = iteration;
+    if (m_maps) {
+        m_maps->residual() = split(parameters, field_count, residual_count);
+        // The residual takes one step per refinement iteration, from the end of matching on.
+        const std::int64_t residual_steps = std::max(0, iteration - m_config.init_iterations);
+        m_residual_adam->restore(AdamState{split(adam.m, field_count, residual_count),
+                                           split(adam.v, field_count, residual_count), residual_steps});
+        m_maps_ready = false;
+        if (iteration >= m_config.init_iterations) {
+            m_maps->evaluate_field(*m_field);
+            m_maps->update();
+            m_maps_ready = true;
+        }
+    }
+}
+
+void Trainer::prepare_maps() {
+    if (m_maps_ready) return;
+    m_maps->evaluate_field(*m_field);
+    m_maps->set_residual_to(m_albedo_target, m_tactile_target);
+    m_maps->update();
+    m_maps_ready = true;
+}
+
+BakedMaps Trainer::export_maps() const {
+    if (!texture_space()) return bake_field(*m_field, *m_target.mesh, m_config.texture_size, m_config.gutter);
+    TDF_CHECK(m_maps_ready);
+    BakedMaps maps;
+    maps.albedo = m_maps->export_albedo();
+    maps.tactile_normal = m_maps->export_normal();
+    maps.raster = m_atlas->raster;
+    return maps;
+}
+
+// What iteration i computes: the phase table of spec 5.1 (i is the 0-based loop index).
+struct Trainer::Phase {
+    int i = 0;
+    bool per_pixel_albedo = false;
+    float albedo_weight = 0, tactile_weight = 0;
+    bool visual_guidance = false, tactile_guidance = false;
+};
+
+Trainer::Phase Trainer::phase_of(int i) const {
+    const RunConfig& cfg = m_config;
+    Phase phase;
+    phase.i = i;
+    phase.per_pixel_albedo = i <= cfg.init_iterations;
+    phase.albedo_weight = phase.per_pixel_albedo ? cfg.weights.albedo_init : cfg.weights.albedo_refine;
+    phase.tactile_weight = i < cfg.init_iterations ? cfg.weights.tactile_init : cfg.weights.tactile_refine;
+    phase.visual_guidance = m_visual_guidance && i >= cfg.init_iterations && cfg.weights.visual_guidance > 0;
+    phase.tactile_guidance = m_tactile_guidance && i > cfg.init_iterations && cfg.weights.tactile_guidance > 0;
+    return phase;
 }
 
 LossRecord Trainer::step() {
-    const RunConfig& cfg = m_config;
-    const TriangleMesh& mesh = *m_target.mesh;
-    Batch& b = *m_batch;
     const int i = m_iteration;
+    if (texture_space() && i < m_config.init_iterations) return fit_maps(i);
     const auto iteration_start = Clock::now();
+    LossRecord record = loss_and_gradient(i);
+    const auto t0 = Clock::now();
+    update(i);
+    m_times.adam += seconds_since(t0);
+    ++m_iteration;
+    record.seconds = seconds_since(iteration_start);
+    return record;
+}
+
+LossRecord Trainer::loss_and_gradient(int i) {
+    if (texture_space()) prepare_maps();
+    const Phase phase = phase_of(i);
     Rng rng = Rng::stream(m_seed, std::uint64_t(i));
-
-    // Phase table of spec 5.1 (i is the 0-based loop index).
-    const bool per_pixel_albedo = i <= cfg.init_iterations;
-    const float albedo_weight = per_pixel_albedo ? cfg.weights.albedo_init : cfg.weights.albedo_refine;
-    const float tactile_weight = i < cfg.init_iterations ? cfg.weights.tactile_init : cfg.weights.tactile_refine;
-    const bool visual_guidance = m_visual_guidance && i >= cfg.init_iterations && cfg.weights.visual_guidance > 0;
-    const bool tactile_guidance = m_tactile_guidance && i > cfg.init_iterations && cfg.weights.tactile_guidance > 0;
-
-    // ---- 1. Cameras and tracing ------------------------------------------------------------
     auto t0 = Clock::now();
+    sample_cameras(rng);
+    trace_views();
+    m_times.tracing += seconds_since(t0);
+
+    t0 = Clock::now();
+    evaluate_surface(phase.visual_guidance);
+    m_times.field_forward += seconds_since(t0);
+
+    LossRecord record;
+    record.iteration = i;
+    t0 = Clock::now();
+    const double guidance_before = m_times.guidance;
+    tactile_terms(phase, record);
+    visual_terms(phase, record);
+    m_times.losses += seconds_since(t0) - (m_times.guidance - guidance_before);
+
+    double total = 0;
+    for (const auto& [name, value] : record.terms) {
+        if (!std::isfinite(value))
+            throw_error("iteration {}: loss term '{}' is not finite ({}); the field was not updated", i, name, value);
+        total += value;
+    }
+    record.terms["total"] = total;
+    t0 = Clock::now();
+    backward(i);
+    m_times.field_backward += seconds_since(t0);
+    return record;
+}
+
+std::vector<float> Trainer::gradient() const {
+    std::vector<float> all = m_gradient;
+    if (m_maps) all.insert(all.end(), m_residual_gradient.begin(), m_residual_gradient.end());
+    return all;
+}
+
+void Trainer::set_parameters(const std::vector<float>& parameters) {
+    const std::size_t field_count = m_field->parameter_count();
+    const std::size_t residual_count = m_maps ? m_maps->residual().size() : 0;
+    if (parameters.size() != field_count + residual_count)
+        throw_error("{} parameters given, this configuration has {}", parameters.size(), field_count + residual_count);
+    std::copy_n(parameters.begin(), field_count, m_field->parameters().begin());
+    if (m_maps) {
+        std::copy(parameters.begin() + std::ptrdiff_t(field_count), parameters.end(), m_maps->residual().begin());
+        if (m_maps_ready) {
+            m_maps->evaluate_field(*m_field);
+            m_maps->update();
+        }
+    }
+}
+
+// ---- Matching phase of the texture-space optimizer ------------------------------------------
+// The targets are known per texel, so the grid is fitted to them directly on a random sample of
+// texels each iteration (dense supervision, no rendering), and the residual takes what the grid
+// cannot hold when the phase ends (prepare_maps).
+LossRecord Trainer::fit_maps(int i) {
+    const auto start = Clock::now();
+    const RunConfig& cfg = m_config;
+    Batch& b = *m_batch;
+    const TexelAtlas& atlas = *m_atlas;
+    Rng rng = Rng::stream(m_seed, std::uint64_t(i));
+    const std::size_t n = std::min<std::size_t>(std::size_t(cfg.fit_texels), atlas.covered_count());
+    std::vector<std::uint32_t>& picked = b.fit_texels;
+    picked.resize(n);
+    if (n == atlas.covered_count()) {
+        for (std::size_t k = 0; k < n; ++k) picked[k] = std::uint32_t(k);
+    } else {
+        for (std::size_t k = 0; k < n; ++k) picked[k] = std::uint32_t(rng.uniform_int(0, int(atlas.covered_count()) - 1));
+    }
+    b.points.resize(n);
+    for (std::size_t k = 0; k < n; ++k) b.points[k] = atlas.points[picked[k]];
+    b.outputs.resize(n);
+    m_field->evaluate(b.points.data(), n, b.outputs.data(), b.field_cache);
+    b.grads.assign(n, FieldOutputGrads{});
+
+    const float wa = cfg.weights.texture_albedo, wt = cfg.weights.texture_tactile;
+    std::vector<double> partial(chunk_count(n, kPixelGrain) * 2, 0.0);
+    parallel_for(n, kPixelGrain, [&](std::size_t begin, std::size_t end) {
+        double albedo_sum = 0, tactile_sum = 0;
+        for (std::size_t k = begin; k < end; ++k) {
+            const std::size_t t = atlas.texels[picked[k]];
+            const float* ta = m_albedo_target.data() + 3 * t;
+            const Vec3f target_normal{m_tactile_target.data()[3 * t], m_tactile_target.data()[3 * t + 1],
+                                      m_tactile_target.data()[3 * t + 2]};
+            const Vec3f e = b.outputs[k].albedo - Vec3f{ta[0], ta[1], ta[2]};
+            albedo_sum += double(dot(e, e));
+            // mean over texels x 3 channels of the squared error; mean over texels of 1 - cos.
+            b.grads[k].d_albedo = e * (2.0f * wa / (3.0f * float(n)));
+            const Vec3f p = b.outputs[k].normal;  // unit
+            tactile_sum += 1.0 - double(dot(p, target_normal));
+            b.grads[k].d_normal = normalize_backward(p, target_normal * (-wt / float(n)), 1e-12f);
+        }
+        const std::size_t c = begin / kPixelGrain;
+        partial[2 * c] = albedo_sum;
+        partial[2 * c + 1] = tactile_sum;
+    });
+    double albedo_sum = 0, tactile_sum = 0;
+    for (std::size_t c = 0; c < partial.size() / 2; ++c) albedo_sum += partial[2 * c], tactile_sum += partial[2 * c + 1];
+    LossRecord record;
+    record.iteration = i;
+    record.terms["texture_albedo"] = wa * albedo_sum / (3.0 * double(n));
+    record.terms["texture_tactile"] = wt * tactile_sum / double(n);
+    record.terms["total"] = record.terms["texture_albedo"] + record.terms["texture_tactile"];
+    for (const auto& [name, value] : record.terms)
+        if (!std::isfinite(value))
+            throw_error("iteration {}: loss term '{}' is not finite ({}); the field was not updated", i, name, value);
+    std::fill(m_gradient.begin(), m_gradient.end(), 0.0f);
+    m_field->backward(b.points.data(), b.grads.data(), n, m_gradient, b.field_cache);
+    for (float g : m_gradient)
+        if (!std::isfinite(g)) throw_error("iteration {}: the field gradient is not finite; the field was not updated", i);
+    m_adam->step(m_field->parameters(), m_gradient);
+    ++m_iteration;
+    if (m_iteration == cfg.init_iterations) prepare_maps();
+    record.seconds = seconds_since(start);
+    m_times.matching += record.seconds;
+    return record;
+}
+
+// ---- 1. Cameras: patches first, then visual views (the order of random draws of spec 9) ----
+void Trainer::sample_cameras(Rng& rng) {
+    const RunConfig& cfg = m_config;
+    Batch& b = *m_batch;
     const int P = cfg.patch_batch_size, B = cfg.batch_size, R = cfg.patch_resolution, S = cfg.resolution;
     b.cameras.resize(std::size_t(P + B));
     b.gbuffers.resize(std::size_t(P + B));
     b.views.resize(std::size_t(B));
     b.lights.resize(std::size_t(B));
-    for (int k = 0; k < P; ++k) b.cameras[std::size_t(k)] =
-            sample_patch_view(rng, mesh, R, cfg.patch_distance, cfg.patch_half_extent);
+    for (int k = 0; k < P; ++k)
+        b.cameras[std::size_t(k)] = sample_patch_view(rng, *m_target.mesh, R, cfg.patch_distance, cfg.patch_half_extent);
     VisualViewOptions view_options;
     view_options.resolution = S;
     view_options.random_ssaa = cfg.max_ssaa > 1.0f;
@@ -186,41 +412,86 @@ LossRecord Trainer::step() {
         b.cameras[std::size_t(P + k)] = v.camera;
         b.lights[std::size_t(k)] = sample_magic3d_light(rng, v.camera.position);
     }
-    for (std::size_t k = 0; k < b.cameras.size(); ++k)
-        trace_gbuffer(*m_target.scene, mesh, b.cameras[k], b.gbuffers[k]);
+}
 
-    // Gather hit points (background pixels need no field evaluation, spec 13.18).
+// ---- 2. Tracing, and the list of hits (background pixels need no evaluation, spec 13.18) ----
+void Trainer::trace_views() {
+    Batch& b = *m_batch;
+    for (std::size_t k = 0; k < b.cameras.size(); ++k)
+        trace_gbuffer(*m_target.scene, *m_target.mesh, b.cameras[k], b.gbuffers[k]);
     b.point_of.resize(b.gbuffers.size());
     b.points.clear();
+    b.patch_hit_count = 0;
+    b.hit_pixel.clear();
+    b.hit_view.clear();
     for (std::size_t k = 0; k < b.gbuffers.size(); ++k) {
+        if (k == std::size_t(m_config.patch_batch_size)) b.patch_hit_count = b.hit_pixel.size();
         const GBuffer& g = b.gbuffers[k];
         std::vector<int>& point_of = b.point_of[k];
         point_of.resize(g.pixel_count());
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] > 0.0f) {
-                point_of[p] = int(b.points.size());
-                b.points.push_back(g.position[p]);
+                point_of[p] = int(b.hit_pixel.size());
+                if (!texture_space()) b.points.push_back(g.position[p]);  // the field's inputs
+                b.hit_pixel.push_back(std::uint32_t(p));
+                b.hit_view.push_back(std::uint16_t(k));
             } else {
                 point_of[p] = -1;
             }
         }
     }
-    const std::size_t n = b.points.size();
-    m_times.tracing += seconds_since(t0);
+    if (b.gbuffers.size() <= std::size_t(m_config.patch_batch_size)) b.patch_hit_count = b.hit_pixel.size();
+}
 
-    // ---- 2. Field forward --------------------------------------------------------------------
-    t0 = Clock::now();
+// ---- 3. The surface at every hit: field (pixel) or learned maps (texture) -------------------
+void Trainer::evaluate_surface(bool with_view_normals) {
+    Batch& b = *m_batch;
+    const std::size_t n = b.hit_pixel.size();
     b.outputs.resize(n);
-    m_field->evaluate(b.points.data(), n, b.outputs.data(), b.field_cache);
     b.grads.assign(n, FieldOutputGrads{});
-    m_times.field_forward += seconds_since(t0);
+    if (!texture_space()) {
+        m_field->evaluate(b.points.data(), n, b.outputs.data(), b.field_cache);
+        return;
+    }
+    const MipTexture& albedo = m_maps->albedo();
+    const MipTexture& normal = m_maps->normal();
+    b.lookup_uv.resize(n);
+    b.lookup_lod.resize(n);
+    b.raw_normal.resize(n);
+    b.curvature.assign(n, 0.0f);
+    parallel_for(n, kPixelGrain, [&](std::size_t begin, std::size_t end) {
+        TrilinearTaps taps;
+        float value[3];
+        for (std::size_t q = begin; q < end; ++q) {
+            const GBuffer& g = b.gbuffers[b.hit_view[q]];
+            const std::size_t p = b.hit_pixel[q];
+            // Both maps have the atlas's size, so one LOD serves both (spec 3.7).
+            const float lod = albedo.level_of_detail(g.duv_dx[p], g.duv_dy[p]);
+            b.lookup_uv[q] = g.uv[p];
+            b.lookup_lod[q] = lod;
+            albedo.taps(g.uv[p], lod, -1, taps);
+            // Patches read only the normal map; views the albedo, and the normals only for the
+            // visual guidance's shading and control images.
+            const bool patch = q < b.patch_hit_count;
+            if (!patch) {
+                albedo.gather(taps, value);
+                b.outputs[q].albedo = {value[0], value[1], value[2]};
+            }
+            if (patch || with_view_normals) {
+                normal.gather(taps, value);  // same size, same taps
+                b.raw_normal[q] = {value[0], value[1], value[2]};
+                // Renormalised per pixel as the training renderer does with its maps (spec 3.1 step 5).
+                b.outputs[q].normal = safe_normalize(b.raw_normal[q]);
+            }
+        }
+    });
+}
 
-    LossRecord record;
-    record.iteration = i;
-    double guidance_seconds = 0;
-    t0 = Clock::now();
-
-    // ---- 3. Tactile terms on patch view-space shading normals (spec 5.3, 5.5) ----------------
+// ---- 4a. Tactile terms on patch view-space shading normals (spec 5.3, 5.5) -----------------
+void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
+    const RunConfig& cfg = m_config;
+    Batch& b = *m_batch;
+    const int P = cfg.patch_batch_size, R = cfg.patch_resolution;
     const std::size_t patch_pixels = std::size_t(R) * std::size_t(R);
     b.patch_pred.resize(std::size_t(P) * patch_pixels);
     b.patch_target.resize(b.patch_pred.size());
@@ -243,18 +514,18 @@ LossRecord Trainer::step() {
             }
         });
     }
-    if (tactile_weight > 0 && P > 0)
+    if (phase.tactile_weight > 0 && P > 0)
         record.terms["tactile_matching"] =
-            tactile_weight * tactile_matching_loss(b.patch_pred.data(), b.patch_target.data(), b.patch_pred.size(),
-                                                   b.patch_grad.data(), tactile_weight);
-    if (tactile_guidance && P > 0) {
+            phase.tactile_weight * tactile_matching_loss(b.patch_pred.data(), b.patch_target.data(),
+                                                         b.patch_pred.size(), b.patch_grad.data(), phase.tactile_weight);
+    if (phase.tactile_guidance && P > 0) {
         const auto g0 = Clock::now();
         GuidanceRequest request;
         request.kind = GuidanceKind::Tactile;
         request.prompt = "sks normal map";  // spec 5.5
         request.strength = kTactileGuidanceStrength;
-        request.iteration = i;
-        request.seed = m_seed ^ (std::uint64_t(i) << 20);
+        request.iteration = phase.i;
+        request.seed = m_seed ^ (std::uint64_t(phase.i) << 20);
         request.pixels_per_texel = m_patch_pixels_per_texel;
         for (int k = 0; k < P; ++k) {
             const GBuffer& g = b.gbuffers[std::size_t(k)];
@@ -277,20 +548,30 @@ LossRecord Trainer::step() {
         }
         const GuidanceResult result = m_tactile_guidance->refine(request);
         validate_result(request, result, m_tactile_guidance->name());
-        if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, i, request, result);
+        if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, phase.i, request, result);
         std::vector<Vec3f> refined(b.patch_pred.size());
         for (int k = 0; k < P; ++k)
-            std::copy_n(result.refined[std::size_t(k)].data(), 3 * patch_pixels,
-                        &refined[std::size_t(k) * patch_pixels].x);
+            std::copy_n(result.refined[std::size_t(k)].data(), 3 * patch_pixels, &refined[std::size_t(k) * patch_pixels].x);
         const TactileGuidanceMetric metric = cfg.tactile_guidance_loss == TactileGuidanceLoss::Cosine
                                                  ? TactileGuidanceMetric::Cosine
                                                  : TactileGuidanceMetric::Mse;
         const float w = cfg.weights.tactile_guidance;
         record.terms["tactile_guidance"] =
             w * tactile_guidance_loss(metric, b.patch_pred.data(), refined.data(), refined.size(), b.patch_grad.data(), w);
-        guidance_seconds += seconds_since(g0);
+        m_times.guidance += seconds_since(g0);
     }
-    // Back through the view rotation and the TBN composition to the field's normal output.
+    if (texture_space()) {
+        // 1 - cos has unit curvature across the unit sphere; MSE on 3 components 2 / 3 per value.
+        const double pixels = double(P) * double(patch_pixels);
+        double kappa = phase.tactile_weight > 0 ? double(phase.tactile_weight) / pixels : 0.0;
+        if (phase.tactile_guidance)
+            kappa += double(cfg.weights.tactile_guidance) / pixels *
+                     (cfg.tactile_guidance_loss == TactileGuidanceLoss::Cosine ? 1.0 : 2.0 / 3.0);
+        for (int k = 0; k < P; ++k)
+            for (int q : b.point_of[std::size_t(k)])
+                if (q >= 0) b.curvature[std::size_t(q)] = float(kappa);
+    }
+    // Back through the view rotation and the TBN composition to the surface's tangent normal.
     for (int k = 0; k < P; ++k) {
         const GBuffer& g = b.gbuffers[std::size_t(k)];
         const ViewRotation rot = view_rotation(b.cameras[std::size_t(k)]);
@@ -307,18 +588,26 @@ LossRecord Trainer::step() {
             }
         });
     }
+}
 
-    // ---- 4. Visual terms on the global views (spec 5.2, 5.4) ----------------------------------
+// ---- 4b. Visual terms on the global views (spec 5.2, 5.4) -----------------------------------
+void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
+    const RunConfig& cfg = m_config;
+    const TriangleMesh& mesh = *m_target.mesh;
+    Batch& b = *m_batch;
+    const int P = cfg.patch_batch_size, B = cfg.batch_size, S = cfg.resolution;
+    const bool visual_guidance = phase.visual_guidance;
     const std::size_t view_values = std::size_t(S) * std::size_t(S) * 3;
     b.albedo_pred.resize(std::size_t(B) * view_values);
     b.albedo_target.resize(b.albedo_pred.size());
     b.albedo_grad.assign(b.albedo_pred.size(), 0.0f);
     if (visual_guidance) {
         b.lambertian.resize(b.albedo_pred.size());
+        b.lambertian_target.resize(b.albedo_pred.size());
         b.lambertian_grad.assign(b.albedo_pred.size(), 0.0f);
-        b.shade.assign(n, 0.0f);
+        b.shade.assign(b.hit_pixel.size(), 0.0f);
     }
-    std::vector<Image> controls, masks;
+    std::vector<Image> controls, masks, surfaces;
     for (int k = 0; k < B; ++k) {
         const std::size_t gi = std::size_t(P + k);
         const GBuffer& g = b.gbuffers[gi];
@@ -327,8 +616,7 @@ LossRecord Trainer::step() {
         const bool resized = g.width != S || g.height != S;
         // Renders composited on white at the internal size, then resized to S x S (spec 3.8).
         const auto render_internal = [&](auto&& colour_of_hit, float* out) {
-            if (b.internal.width() != g.width || b.internal.height() != g.height)
-                b.internal = Image(g.width, g.height, 3);
+            if (b.internal.width() != g.width || b.internal.height() != g.height) b.internal = Image(g.width, g.height, 3);
             std::fill(b.internal.values().begin(), b.internal.values().end(), 1.0f);  // white background
             parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
                 for (std::size_t p = begin; p < end; ++p) {
@@ -342,8 +630,18 @@ LossRecord Trainer::step() {
         };
         float* pred = b.albedo_pred.data() + std::size_t(k) * view_values;
         render_internal([&](std::size_t, std::size_t q) { return b.outputs[q].albedo; }, pred);
-        render_internal([&](std::size_t p, std::size_t) { return sample_albedo(*m_target.material, mesh, g, p, true); },
-                        b.albedo_target.data() + std::size_t(k) * view_values);
+        // The input's albedo: in texture space its bake over the atlas, sampled exactly as the learned
+        // map is (same taps), so the learned map at its start renders identical images and only
+        // what guidance asks for changes it; per pixel, the material itself (spec 3.1 step 5).
+        const auto input_albedo = [&](std::size_t p, std::size_t q) {
+            if (!texture_space()) return sample_albedo(*m_target.material, mesh, g, p, true);
+            TrilinearTaps taps;
+            float value[3];
+            m_albedo_target_texture.taps(b.lookup_uv[q], b.lookup_lod[q], -1, taps);
+            m_albedo_target_texture.gather(taps, value);
+            return Vec3f{value[0], value[1], value[2]};
+        };
+        render_internal(input_albedo, b.albedo_target.data() + std::size_t(k) * view_values);
         if (visual_guidance) {
             const Vec3f light = b.lights[std::size_t(k)];
             const ViewRotation rot = view_rotation(view.camera);
@@ -355,28 +653,35 @@ LossRecord Trainer::step() {
                     return lambertian(b.outputs[q].albedo, b.shade[q]);
                 },
                 b.lambertian.data() + std::size_t(k) * view_values);
-            Image control(S, S, 3), mask(S, S, 1);
+            // The input asset under the same light and relief: what relief-aware refinement keeps.
+            render_internal(
+                [&](std::size_t p, std::size_t q) { return lambertian(input_albedo(p, q), b.shade[q]); },
+                b.lambertian_target.data() + std::size_t(k) * view_values);
             Image normals_internal(g.width, g.height, 3, 0.0f), mask_internal(g.width, g.height, 1, 0.0f);
+            Image surface_internal(g.width, g.height, 3, 0.0f);
             for (std::size_t p = 0; p < g.pixel_count(); ++p) {
                 const int q = point_of[p];
                 if (q < 0) continue;
                 const Vec3f n_v = tangent_to_view(g, p, rot, b.outputs[std::size_t(q)].normal);
                 std::copy(&n_v.x, &n_v.x + 3, normals_internal.data() + 3 * p);
+                const Vec3f s_v = view_space_normal(rot, g.normal[p]);
+                std::copy(&s_v.x, &s_v.x + 3, surface_internal.data() + 3 * p);
                 mask_internal.data()[p] = 1.0f;
             }
             controls.push_back(to_bae_control(resized ? downsample_bilinear(normals_internal, S, S) : normals_internal));
             masks.push_back(resized ? downsample_bilinear(mask_internal, S, S) : mask_internal);
+            surfaces.push_back(resized ? downsample_bilinear(surface_internal, S, S) : surface_internal);
         }
     }
     const ImageBatchShape shape{B, S, S, 3};
-    if (albedo_weight > 0 && B > 0) {
+    if (phase.albedo_weight > 0 && B > 0) {
         const double value =
-            per_pixel_albedo
+            phase.per_pixel_albedo
                 ? mse_loss(b.albedo_pred.data(), b.albedo_target.data(), b.albedo_pred.size(), b.albedo_grad.data(),
-                           albedo_weight)
+                           phase.albedo_weight)
                 : mean_colour_mse_loss(b.albedo_pred.data(), b.albedo_target.data(), shape, b.albedo_grad.data(),
-                                       albedo_weight);
-        record.terms[per_pixel_albedo ? "albedo_matching" : "albedo_mean_colour"] = albedo_weight * value;
+                                       phase.albedo_weight);
+        record.terms[phase.per_pixel_albedo ? "albedo_matching" : "albedo_mean_colour"] = phase.albedo_weight * value;
     }
     if (visual_guidance && B > 0) {
         const auto g0 = Clock::now();
@@ -384,19 +689,22 @@ LossRecord Trainer::step() {
         request.kind = GuidanceKind::Visual;
         request.prompt = m_target.prompt;
         request.negative_prompt = kNegativePrompt;
-        request.strength = visual_guidance_strength(i, cfg.init_iterations, cfg.iterations);
-        request.iteration = i;
-        request.seed = m_seed ^ (std::uint64_t(i) << 20) ^ 0x5649u;
+        request.strength = visual_guidance_strength(phase.i, cfg.init_iterations, cfg.iterations);
+        request.iteration = phase.i;
+        request.seed = m_seed ^ (std::uint64_t(phase.i) << 20) ^ 0x5649u;
         for (int k = 0; k < B; ++k) {
-            Image image(S, S, 3);
+            Image image(S, S, 3), reference(S, S, 3);
             std::copy_n(b.lambertian.data() + std::size_t(k) * view_values, view_values, image.data());
+            std::copy_n(b.lambertian_target.data() + std::size_t(k) * view_values, view_values, reference.data());
             request.images.push_back(std::move(image));
+            request.reference_images.push_back(std::move(reference));
         }
         request.control = std::move(controls);
         request.masks = std::move(masks);
+        request.surface_normals = std::move(surfaces);
         GuidanceResult result = m_visual_guidance->refine(request);
         validate_result(request, result, m_visual_guidance->name());
-        if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, i, request, result);
+        if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, phase.i, request, result);
         std::vector<float> refined(b.lambertian.size());
         for (int k = 0; k < B; ++k) {
             // Background forced to white (spec 5.4).
@@ -407,15 +715,19 @@ LossRecord Trainer::step() {
             copy_into(r, refined.data() + std::size_t(k) * view_values);
         }
         const float w = cfg.weights.visual_guidance, ws = cfg.weights.visual_guidance_structural;
-        const double l1 = l1_loss(b.lambertian.data(), refined.data(), refined.size(), b.lambertian_grad.data(), w);
-        const double structural = ws > 0 ? ssim_loss(b.lambertian.data(), refined.data(), shape,
-                                                      b.lambertian_grad.data(), w * ws)
-                                          : 0.0;
-        record.terms["visual_guidance_l1"] = w * l1;
-        record.terms["visual_guidance_structural"] = w * ws * structural;
-        guidance_seconds += seconds_since(g0);
+        if (cfg.visual_guidance_loss == "mse") {
+            record.terms["visual_guidance_mse"] =
+                w * mse_loss(b.lambertian.data(), refined.data(), refined.size(), b.lambertian_grad.data(), w);
+        } else {
+            const double l1 = l1_loss(b.lambertian.data(), refined.data(), refined.size(), b.lambertian_grad.data(), w);
+            const double structural =
+                ws > 0 ? ssim_loss(b.lambertian.data(), refined.data(), shape, b.lambertian_grad.data(), w * ws) : 0.0;
+            record.terms["visual_guidance_l1"] = w * l1;
+            record.terms["visual_guidance_structural"] = w * ws * structural;
+        }
+        m_times.guidance += seconds_since(g0);
     }
-    // Back through the resize (its adjoint) to the internal pixels, then to the field's albedo.
+    // Back through the resize (its adjoint) to the internal pixels, then to the surface's albedo.
     for (int k = 0; k < B; ++k) {
         const std::size_t gi = std::size_t(P + k);
         const GBuffer& g = b.gbuffers[gi];
@@ -428,10 +740,25 @@ LossRecord Trainer::step() {
         };
         const Image albedo_grad = to_internal(b.albedo_grad);
         const Image lambertian_grad = visual_guidance ? to_internal(b.lambertian_grad) : Image();
+        // Jacobi denominators: per value, 2 w / N for squared errors (an L1 term counts as a
+        // squared error at a 0.1 scale), spread over the internal pixels as the resize spreads
+        // the gradients.
+        const double values = double(b.albedo_pred.size());
+        const double ssaa_share = double(S) * double(S) / (double(g.width) * double(g.height));
+        const double albedo_kappa =
+            (phase.per_pixel_albedo ? 2.0 * double(phase.albedo_weight) / values : 0.0) * ssaa_share;
+        const double lambertian_kappa =
+            visual_guidance ? (cfg.visual_guidance_loss == "mse" ? 2.0 : 10.0) * double(cfg.weights.visual_guidance) /
+                                  values * ssaa_share
+                            : 0.0;
         parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin; p < end; ++p) {
                 const int q = point_of[p];
                 if (q < 0) continue;
+                if (texture_space()) {
+                    const double shade = visual_guidance ? double(b.shade[std::size_t(q)]) : 0.0;
+                    b.curvature[std::size_t(q)] = float(albedo_kappa + lambertian_kappa * shade * shade);
+                }
                 const float* ga = albedo_grad.data() + 3 * p;
                 Vec3f d{ga[0], ga[1], ga[2]};
                 if (visual_guidance) {
@@ -442,31 +769,71 @@ LossRecord Trainer::step() {
             }
         });
     }
-    m_times.guidance += guidance_seconds;
-    m_times.losses += seconds_since(t0) - guidance_seconds;
+}
 
-    double total = 0;
-    for (const auto& [name, value] : record.terms) {
-        if (!std::isfinite(value))
-            throw_error("iteration {}: loss term '{}' is not finite ({}); the field was not updated", i, name, value);
-        total += value;
-    }
-    record.terms["total"] = total;
-
-    // ---- 5. Backward and Adam -----------------------------------------------------------------
-    t0 = Clock::now();
+// ---- 5. Backward to the parameters ----------------------------------------------------------
+void Trainer::backward(int i) {
+    Batch& b = *m_batch;
+    const std::size_t n = b.hit_pixel.size();
     std::fill(m_gradient.begin(), m_gradient.end(), 0.0f);
-    m_field->backward(b.points.data(), b.grads.data(), n, m_gradient, b.field_cache);
-    m_times.field_backward += seconds_since(t0);
+    if (!texture_space()) {
+        m_field->backward(b.points.data(), b.grads.data(), n, m_gradient, b.field_cache);
+        for (float g : m_gradient)
+            if (!std::isfinite(g)) throw_error("iteration {}: the field gradient is not finite; the field was not updated", i);
+        return;
+    }
+    // The adjoint of the map lookups: each hit's gradient goes to the texels it blended. Albedo
+    // and normal maps are independent, so the two scatters run side by side, each in hit order
+    // (fixed summation order: the same bits on any thread count).
+    // Channel 3 accumulates the hits' loss curvature through the same taps (the Jacobi step).
+    b.albedo_gradient.reset(m_maps->albedo(), 4);
+    b.normal_gradient.reset(m_maps->normal(), 4);
+    const MipTexture& albedo = m_maps->albedo();
+    const std::size_t patch_hits = b.patch_hit_count;
+    parallel_for(2, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t task = begin; task < end; ++task) {
+            TrilinearTaps taps;
+            MipGradient& target = task == 0 ? b.albedo_gradient : b.normal_gradient;
+            // Patches are hits [0, patch_hits) and send normal gradients; views send albedo ones.
+            const std::size_t first = task == 0 ? patch_hits : 0, last = task == 0 ? n : patch_hits;
+            for (std::size_t q = first; q < last; ++q) {
+                const FieldOutputGrads& g = b.grads[q];
+                const Vec3f d = task == 0 ? g.d_albedo : normalize_backward(b.raw_normal[q], g.d_normal, 1e-10f);
+                const float value[4] = {d.x, d.y, d.z, b.curvature[q]};
+                if (value[0] == 0.0f && value[1] == 0.0f && value[2] == 0.0f && value[3] == 0.0f) continue;
+                albedo.taps(b.lookup_uv[q], b.lookup_lod[q], -1, taps);
+                target.add(taps, value);
+            }
+        }
+    });
+    b.albedo_gradient.collapse();
+    b.normal_gradient.collapse();
+    m_residual_gradient.assign(m_maps->residual().size(), 0.0f);
+    m_maps->backward(b.albedo_gradient.level0(), b.normal_gradient.level0(), m_residual_gradient,
+                     m_config.refine_grid ? &b.texel_grads : nullptr);
+    if (m_config.refine_grid) m_maps->field_backward(*m_field, b.texel_grads, m_gradient);
+    for (float g : m_residual_gradient)
+        if (!std::isfinite(g)) throw_error("iteration {}: the map gradient is not finite; the maps were not updated", i);
     for (float g : m_gradient)
         if (!std::isfinite(g)) throw_error("iteration {}: the field gradient is not finite; the field was not updated", i);
-    t0 = Clock::now();
-    m_adam->step(m_field->parameters(), m_gradient);
-    m_times.adam += seconds_since(t0);
+}
 
-    ++m_iteration;
-    record.seconds = seconds_since(iteration_start);
-    return record;
+// ---- 6. The Adam step (and, texture evaluation, the maps it changed) ------------------------
+void Trainer::update(int i) {
+    if (!texture_space()) {
+        m_adam->step(m_field->parameters(), m_gradient);
+        return;
+    }
+    (void)i;
+    if (m_config.residual_optimizer == "jacobi")
+        m_maps->jacobi_step(m_batch->albedo_gradient.level0(), m_batch->normal_gradient.level0(), m_config.residual_step);
+    else
+        m_residual_adam->step(m_maps->residual(), m_residual_gradient);
+    if (m_config.refine_grid) {
+        m_adam->step(m_field->parameters(), m_gradient);
+        m_maps->evaluate_field(*m_field);
+    }
+    m_maps->update();
 }
 
 Camera Trainer::held_out_view(int k) const {
@@ -483,13 +850,38 @@ Camera Trainer::held_out_patch(int k) const {
                              m_config.patch_half_extent);
 }
 
+void Trainer::evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs) const {
+    std::vector<std::size_t> hits;
+    for (std::size_t p = 0; p < g.pixel_count(); ++p)
+        if (g.mask[p] > 0.0f) hits.push_back(p);
+    outputs.resize(hits.size());
+    if (!texture_space()) {
+        std::vector<Vec3f> points(hits.size());
+        for (std::size_t q = 0; q < hits.size(); ++q) points[q] = g.position[hits[q]];
+        m_field->evaluate(points.data(), points.size(), outputs.data());
+        return;
+    }
+    if (!m_maps_ready) throw_error("the learned maps exist only after the matching phase");
+    const MipTexture& albedo = m_maps->albedo();
+    const MipTexture& normal = m_maps->normal();
+    parallel_for(hits.size(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
+        TrilinearTaps taps;
+        float value[3];
+        for (std::size_t q = begin; q < end; ++q) {
+            const std::size_t p = hits[q];
+            albedo.taps(g.uv[p], albedo.level_of_detail(g.duv_dx[p], g.duv_dy[p]), -1, taps);
+            albedo.gather(taps, value);
+            outputs[q].albedo = {value[0], value[1], value[2]};
+            normal.gather(taps, value);
+            outputs[q].normal = safe_normalize(Vec3f{value[0], value[1], value[2]});
+            outputs[q].label[0] = outputs[q].label[1] = 0.0f;
+        }
+    });
+}
+
 void Trainer::trace_and_evaluate(const Camera& camera, GBuffer& g, std::vector<FieldOutputs>& outputs) const {
     trace_gbuffer(*m_target.scene, *m_target.mesh, camera, g);
-    std::vector<Vec3f> points;
-    for (std::size_t p = 0; p < g.pixel_count(); ++p)
-        if (g.mask[p] > 0.0f) points.push_back(g.position[p]);
-    outputs.resize(points.size());
-    m_field->evaluate(points.data(), points.size(), outputs.data());
+    evaluate_hits(g, outputs);
 }
 
 namespace {
@@ -601,7 +993,7 @@ Json StageTimes::to_json(int iterations) const {
     const double n = std::max(iterations, 1);
     return {{"tracing", tracing / n},     {"field_forward", field_forward / n}, {"losses", losses / n},
             {"guidance", guidance / n},   {"field_backward", field_backward / n}, {"adam", adam / n},
-            {"iterations", iterations}};
+            {"matching_total", matching}, {"iterations", iterations}};
 }
 
 }  // namespace tdf

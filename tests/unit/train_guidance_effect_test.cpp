@@ -33,7 +33,9 @@ GuidedRun train(const std::string& visual, const std::string& tactile, std::vect
                            {"patch_half_extent", 0.3}, {"held_out_views", 3},     {"held_out_patches", 3}};
     Json merged = {{"optimize", optimize}};
     for (const std::string& o : overrides) apply_override(merged, o);
-    const RunConfig config = RunConfig::from_json(merged["optimize"], Json(), Json(), Json(), "test");
+    // The per-pixel optimizer (schedule=reference), where these effects were first measured; the
+    // texture-space optimizer has its own tests (train_texture_space_test.cpp).
+    const RunConfig config = RunConfig::from_json(merged["optimize"], Json(), Json(), Json(), "test", Json(), "reference");
     TrainingTarget target;
     target.mesh = &run.assets->mesh;
     target.scene = run.assets->scene.get();

@@ -57,8 +57,9 @@ struct GuidanceRequest {
     std::vector<Image> control;
     /// N coverage masks, 1 channel in [0, 1]; 0 = background (spec 3.6 antialiased coverage).
     std::vector<Image> masks;
-    /// Tactile only, optional (empty = unknown; tdf's optimizer fills them): the surface under
-    /// the relief at every pixel, in the images' view space. `surface_normals`: N images of the
+    /// Optional (empty = unknown; tdf's optimizer fills them): the surface under the relief at
+    /// every pixel, in the images' view space (visual requests: `surface_normals` only, so a
+    /// backend can tell the relief's curvature from the mesh's). `surface_normals`: N images of the
     /// interpolated geometric normal (3 channels, unit, zero on the background);
     /// `surface_tangents`: N images of the unit tangent (dP/du) in channels 0-2 and the chart's
     /// handedness (+1 / -1, core/tangent_frame.h) in channel 3. With them a backend can separate
@@ -66,6 +67,11 @@ struct GuidanceRequest {
     /// (and whether it is mirrored) in each patch.
     std::vector<Image> surface_normals;
     std::vector<Image> surface_tangents;
+    /// Visual only, optional (empty = unknown; tdf's optimizer fills them): N renders of the INPUT
+    /// asset (its base albedo) under the same camera, light and relief as `images`, RGB in [0, 1]
+    /// on white. A refinement that should keep the input's appearance (faces, prints, logos) and
+    /// only add to it anchors on these instead of on the current render.
+    std::vector<Image> reference_images;
     /// Tactile only: how many image pixels one texel of the tactile map spans on the surface in
     /// these renders (the patch window against the map's texel size on the atlas, a mean over
     /// the mesh); 0 = unknown. The reference's 0.15-unit, 512-pixel patches magnify a
@@ -98,7 +104,8 @@ struct GuidanceResult {
 
 /// Checks the request's shapes: N >= 1 images of one size with the channel counts documented
 /// above, N masks of that size with 1 channel, N controls for visual requests (none for tactile),
-/// surface frames either absent or N of each (tactile only), finite values, strength in [0, 1],
+/// surface frames either absent or N of each (tactile only), reference images either absent or N
+/// of the images' shape (visual only), finite values, strength in [0, 1],
 /// pixels_per_texel finite and >= 0. Throws tdf::Error naming `where` and the image index.
 void validate_request(const GuidanceRequest& request, const std::string& where);
 

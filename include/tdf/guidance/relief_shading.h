@@ -20,9 +20,12 @@
 ///     contrast k L in cavities, minus its own local mean (so it is pure detail and the local
 ///     mean colour is kept).
 ///  4. With f = denoise_fraction(strength) (0.5 -> 0.3 over the visual schedule: more noise lets
-///     the prior replace more of the input, spec 5.4): c' = L + (1 - f)(c - L) + f R.
-///     Repeated refinement therefore converges (detail -> R) instead of compounding. Clamped to
-///     [0, 1].
+///     the prior replace more of the input, spec 5.4). When the request carries the input's render
+///     (reference_images, `anchor: reference`, the default) L and R are taken from it and
+///     c' = reference + f R: the input's own detail (faces, prints, logos) stays and only
+///     relief-aligned detail is added, where the relief is curved (issue 10 goal 2). Otherwise
+///     c' = L + (1 - f)(c - L) + f R, which replaces part of the render's detail. Either way
+///     repeated refinement converges instead of compounding. Clamped to [0, 1].
 ///  5. Blend by coverage: out = m c' + (1 - m) c; pixels with mask exactly 0 are white (spec 5.4).
 #include <tdf/guidance/guidance_backend.h>
 
@@ -42,6 +45,12 @@ public:
         float curvature_sigma = 1.0f;
         /// "curvature_percentile": quantile of |curvature| (over curved pixels) mapped to 1, (0, 1].
         float curvature_percentile = 0.9f;
+        /// "anchor": "reference" (default) adds the relief to the request's reference images (the
+        /// input asset's render) when it has them: c' = reference + f R, so the input's own detail
+        /// is kept and repeated refinement converges; "current" replaces part of the current
+        /// render's detail (c' = L + (1 - f)(c - L) + f R, the behaviour before issue 10).
+        enum class Anchor { Reference, Current };
+        Anchor anchor = Anchor::Reference;
 
         /// Reads the keys above; throws tdf::Error for unknown keys or bad values.
         static Options from_json(const Json& config);

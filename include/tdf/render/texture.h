@@ -8,9 +8,19 @@
 #include <tdf/core/image.h>
 #include <tdf/core/vec.h>
 
+#include <cstdint>
 #include <vector>
 
 namespace tdf {
+
+/// The texels one trilinear lookup blends: at most 4 of each of two levels (MipTexture::taps).
+struct TrilinearTaps {
+    static constexpr int kMaxTaps = 8;
+    int count = 0;
+    int level[kMaxTaps] = {};
+    std::uint32_t texel[kMaxTaps] = {};  ///< row-major texel index within that level
+    float weight[kMaxTaps] = {};
+};
 
 /// Largest channel count a MipTexture accepts (per-sample scratch lives on the stack).
 constexpr int kMaxTextureChannels = 16;
@@ -23,6 +33,10 @@ public:
     /// level-k texels it covers: exactly the 2x2 box filter of spec 3.7 for even sizes, and a
     /// footprint of 2 + 1/size_{k+1} texels (partial texels weighted by coverage) for odd sizes.
     explicit MipTexture(const Image& image);
+
+    /// Rebuilds the pyramid from `image`, reusing the storage when the size and channel count are
+    /// unchanged (an optimizer updates its maps every iteration without allocating).
+    void assign(const Image& image);
 
     bool empty() const { return m_levels.empty(); }
     int channels() const { return m_levels.empty() ? 0 : m_levels[0].channels(); }
@@ -41,6 +55,13 @@ public:
     void sample_trilinear(Vec2f uv, Vec2f duv_dx, Vec2f duv_dy, float* out, int max_level = -1) const;
     /// The same with the LOD given (from level_of_detail() of a texture of the same size).
     void sample_trilinear_at(Vec2f uv, float lod, float* out, int max_level = -1) const;
+    /// The texels and weights sample_trilinear_at(uv, lod, out, max_level) blends (same LOD
+    /// clamping, same wrap addressing), for optimizers that need the adjoint (texture_gradient.h).
+    /// Weights sum to 1.
+    void taps(Vec2f uv, float lod, int max_level, TrilinearTaps& taps) const;
+    /// The lookup from recorded taps: channels() floats; equal to sample_trilinear_at up to the
+    /// order of float additions.
+    void gather(const TrilinearTaps& taps, float* out) const;
     /// The LOD sample_trilinear() uses (before clamping); equal for textures of equal size.
     float level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const;
 
@@ -50,5 +71,11 @@ private:
 
 /// One level of the pyramid from the previous one (exposed for tests).
 Image downsample_box(const Image& src);
+/// downsample_box() into `dst`, which must be zero-filled and sized
+/// max(1, w / 2) x max(1, h / 2) with src's channel count (adds to it).
+void downsample_box_into(const Image& src, Image& dst);
+/// The adjoint of downsample_box(): adds to `fine` the gradient that `coarse` (the gradient of
+/// downsample_box(fine)) sends back through the box weights.
+void downsample_box_adjoint(const Image& coarse, Image& fine);
 
 }  // namespace tdf

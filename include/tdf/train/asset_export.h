@@ -20,6 +20,11 @@ namespace tdf {
 BakedMaps export_asset(const std::string& folder, const std::string& name, const std::string& postfix,
                        const TextureField& field, const TriangleMesh& mesh, const RunConfig& config);
 
+/// Writes maps that are already baked (the texture-space optimizer's learned maps) with the same
+/// files as export_asset.
+void write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config);
+
 /// Renders `views` azimuths of the exported asset (baked maps, visualizer shading, light from the
 /// camera) and writes `<folder>/turntable/<pass>_<k>.png` for albedo, lambertian,
 /// tactile_normal and shading_normal. Returns the files written.

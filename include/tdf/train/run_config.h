@@ -11,12 +11,19 @@ namespace tdf {
 
 struct LossWeights {
     float albedo_init = 1.0f;         ///< per-pixel MSE weight, iterations [0, init]  (spec 5.2)
-    float albedo_refine = 500.0f;     ///< mean-colour MSE weight after init          (spec 5.2)
+    /// Mean-colour MSE weight after init (spec 5.2): 500 in the reference schedule; 0 in the
+    /// texture schedule, whose Jacobi step is a per-texel (diagonal) update that a global term
+    /// would make overshoot, and whose anchored visual guidance keeps the input's colours anyway.
+    float albedo_refine = 0.0f;
     float tactile_init = 1.0f;        ///< 1 - cos weight during init                  (spec 5.3)
     float tactile_refine = 0.1f;      ///< 1 - cos weight during refinement            (spec 5.3, 13.2)
     float tactile_guidance = 0.05f;   ///< tactile guidance weight, from init + 2      (spec 5.5)
     float visual_guidance = 5.0f;     ///< x (L1 + structural), from init + 1          (spec 5.4)
     float visual_guidance_structural = 1.0f;  ///< weight of the SSIM term inside visual guidance
+    /// Texture evaluation, matching phase: dense texture-space terms against the targets laid over
+    /// the atlas: albedo MSE and tactile 1 - cos, per texel.
+    float texture_albedo = 1.0f;
+    float texture_tactile = 1.0f;
 };
 
 enum class TactileLayout {
@@ -26,16 +33,52 @@ enum class TactileLayout {
 
 enum class TactileGuidanceLoss { Cosine, Mse };
 
+/// Where the texture field is evaluated during training ("field.evaluation").
+enum class FieldEvaluation {
+    /// Default: once per atlas texel; views and patches sample the learned maps with the
+    /// renderer's filtering and send gradients back through its adjoint (issue 10).
+    Texture,
+    /// The reference: at every ray hit of every view, baked into maps only at export (spec 4.3).
+    Pixel,
+};
+
 struct RunConfig {
-    int iterations = 200;           ///< total iterations (spec 5.1 iters_refine)
-    int init_iterations = 150;      ///< matching phase length (spec 5.1 iters_init)
+    /// "schedule": "texture" (default: texture-space evaluation, a dense matching phase of
+    /// 100 iterations on texel samples, 50 refinement iterations) or "reference" (the paper's
+    /// 150 + 50 per-pixel iterations, field.evaluation = pixel). Keys given explicitly win.
+    std::string schedule = "texture";
+    FieldEvaluation evaluation = FieldEvaluation::Texture;
+    int iterations = 150;           ///< total iterations (reference schedule: 200, spec 5.1 iters_refine)
+    int init_iterations = 100;      ///< matching phase length (reference schedule: 150, spec 5.1 iters_init)
+    /// Texture evaluation: texels per matching iteration (random sample of the atlas's texels)
+    /// on which the grid is fitted to the texture-space targets.
+    int fit_texels = 1 << 16;
+    /// Texture evaluation: keep training the grid during refinement (costs a field forward and
+    /// backward over every texel per iteration); false trains only the per-texel residual there.
+    bool refine_grid = false;
+    /// Texture evaluation: how the per-texel residual is updated in refinement. "jacobi"
+    /// (default): every texel seen this iteration moves by `residual_step` times the
+    /// coverage-weighted mean of what its pixels ask for (the gradient divided by the loss's
+    /// curvature summed over the texel's footprint: a diagonal Gauss-Newton step), texels not
+    /// seen do not move; "adam": Adam at `learning_rate` (per-texel sign-like steps: speckle).
+    std::string residual_optimizer = "jacobi";
+    float residual_step = 0.5f;
+    /// The visual guidance loss: "l1_structural" (reference: L1 + structural term, spec 5.4) or
+    /// "mse" (texture schedule default: a squared error, whose gradient says how far each
+    /// pixel is from its target, which the Jacobi step needs).
+    std::string visual_guidance_loss = "mse";
+    /// log2 of the hash table entries per level ("field.table_log2"; reference 15, spec 4.1).
+    int table_log2 = 15;
     int batch_size = 4;             ///< visual views per iteration (spec 2.3)
     int patch_batch_size = 4;       ///< tactile patches per iteration (spec 2.4)
     int resolution = 512;           ///< visual render size (spec 2.3)
     int patch_resolution = 512;     ///< tactile patch render size (spec 2.4)
     float patch_half_extent = 0.075f;  ///< half side of the orthographic patch window, mesh units (spec 2.4)
     float patch_distance = 0.1f;    ///< patch camera height above the surface, mesh units (spec 2.4)
-    float max_ssaa = 2.0f;          ///< random SSAA factor in [1, max] (spec 2.3); 1 = off
+    /// Random SSAA factor in [1, max] (spec 2.3); 1 = off. 2 in the reference schedule; 1 in the
+    /// texture schedule, where visual views only carry guidance: the maps are sampled with their
+    /// mips at the view's footprint either way, and SSAA would cost up to 4x their pixels.
+    float max_ssaa = 1.0f;
     float learning_rate = 0.01f;    ///< Adam lr (spec 4.4)
     LossWeights weights;
     TactileGuidanceLoss tactile_guidance_loss = TactileGuidanceLoss::Cosine;  ///< paper; Mse = code
@@ -60,9 +103,11 @@ struct RunConfig {
     Json guidance_config = Json::object();  ///< the raw "guidance" section for the backends
     bool save_guidance_frames = false;
 
-    /// Reads the three sections (each may be absent); unknown keys are errors naming `source`.
+    /// Reads the sections (each may be absent); unknown keys are errors naming `source`. The
+    /// `schedule` preset is applied first, so keys given explicitly override it.
     static RunConfig from_json(const Json& optimize, const Json& tactile_layout, const Json& exporting,
-                               const Json& guidance, const std::string& source);
+                               const Json& guidance, const std::string& source, const Json& field = Json(),
+                               const Json& schedule = Json());
     /// The resolved configuration, every key present, for `<name>_config.json` and the log.
     Json to_json() const;
     /// Checks ranges; throws tdf::Error naming the key.

@@ -1,11 +1,21 @@
 #pragma once
-/// The optimization loop of `tdf optimize` (spec 9): per iteration, trace tactile patch views and
-/// visual views with Embree, evaluate the texture field at every hit, form the matching and
-/// guidance losses, back-propagate by hand into the field and take one Adam step.
+/// The optimization loop of `tdf optimize` (spec 9). One iteration is a short sequence of stages:
+/// sample cameras, trace them with Embree, evaluate the surface at every hit, form the matching and
+/// guidance losses, back-propagate by hand, take one Adam step.
+///
+/// Two ways to evaluate the surface (RunConfig::evaluation):
+///  - Texture (default): the learned albedo and normal maps over the UV atlas (LearnedMaps: hash
+///    grid at each texel's surface point plus a per-texel residual) are what every hit samples,
+///    trilinearly with the renderer's LOD, and gradients go back through the adjoint of that
+///    sampling to the texels. The matching phase fits the grid to the targets laid over the atlas
+///    on random texels (no rendering: the targets are known in texture space), then the residual
+///    takes the rest, so the maps equal the targets when refinement starts.
+///  - Pixel (schedule=reference): the field at every ray hit, as the reference (spec 4.3).
 ///
 /// Reproducibility: iteration i draws all its randomness from Rng::stream(seed, i), and every
 /// reduction is chunked in a fixed order, so a run gives the same field on any thread count
 /// and a resumed run continues exactly where the interrupted one stopped.
+#include <tdf/core/rng.h>
 #include <tdf/field/texture_field.h>
 #include <tdf/guidance/guidance_backend.h>
 #include <tdf/optim/adam.h>
@@ -15,7 +25,10 @@
 #include <tdf/scene/camera.h>
 #include <tdf/scene/embree_scene.h>
 #include <tdf/train/loss_log.h>
+#include <tdf/train/learned_maps.h>
 #include <tdf/train/run_config.h>
+#include <tdf/train/texel_atlas.h>
+#include <tdf/train/texture_bake.h>
 
 #include <memory>
 #include <string>
@@ -77,6 +90,7 @@ struct LearnedImages {
 /// Per-stage seconds of the iterations so far (README "Measured").
 struct StageTimes {
     double tracing = 0, field_forward = 0, losses = 0, guidance = 0, field_backward = 0, adam = 0;
+    double matching = 0;  ///< texture evaluation: dense fit iterations (no rendering)
     Json to_json(int iterations) const;
 };
 
@@ -97,11 +111,31 @@ public:
     LossRecord step();
     int iteration() const { return m_iteration; }
 
+    /// Iteration `i`'s losses and their gradient with respect to parameters(), without changing
+    /// anything (for finite-difference checks of the whole trainer). Guidance targets count as
+    /// constants, as in step(). Texture evaluation: `i` must be past the matching phase.
+    LossRecord loss_and_gradient(int i);
+    /// The gradient from the last loss_and_gradient() (or step()), laid out like parameters().
+    std::vector<float> gradient() const;
+    /// Replaces every trained value (laid out like parameters()) and refreshes the maps.
+    void set_parameters(const std::vector<float>& parameters);
+
     TextureField& field() { return *m_field; }
     const TextureField& field() const { return *m_field; }
-    const Adam& optimizer() const { return *m_adam; }
-    /// Restores a checkpoint taken after `iteration` iterations.
+    /// Every trained value: the field's parameters, then (texture evaluation) the residual.
+    std::vector<float> parameters() const;
+    /// The optimizer state matching parameters() (moments concatenated the same way).
+    AdamState optimizer_state() const;
+    /// Restores a checkpoint taken after `iteration` iterations (parameters() / optimizer_state()).
     void restore(int iteration, const std::vector<float>& parameters, const AdamState& adam);
+
+    /// The maps as they are now, ready to export: the learned maps themselves (texture
+    /// evaluation) or a bake of the field (pixel evaluation).
+    BakedMaps export_maps() const;
+    /// The texture-space table and targets (texture evaluation only; nullptr otherwise).
+    const TexelAtlas* texel_atlas() const { return m_atlas.get(); }
+    const Image& albedo_target() const { return m_albedo_target; }
+    const Image& tactile_target() const { return m_tactile_target; }
 
     /// Albedo PSNR and tactile cosine on views and patches drawn from a stream no training
     /// iteration uses.
@@ -116,9 +150,28 @@ public:
 
 private:
     struct Batch;  // per-iteration buffers, allocated once (trainer.cpp)
+    struct Phase;  // what iteration i computes (spec 5.1)
 
-    /// Traces `camera` into `g` and evaluates the field at its hits, in pixel order.
+    // The stages of one iteration, in order.
+    LossRecord fit_maps(int i);  // texture evaluation, matching phase: dense fit, no rendering
+    void sample_cameras(Rng& rng);
+    void trace_views();
+    void evaluate_surface(bool with_view_normals);
+    void tactile_terms(const Phase& phase, LossRecord& record);
+    void visual_terms(const Phase& phase, LossRecord& record);
+    void backward(int i);
+    void update(int i);
+    Phase phase_of(int i) const;
+
+    /// Texture evaluation: makes the maps equal the targets (r = target - grid) once the grid fit
+    /// is over, and refreshes them after every update.
+    void prepare_maps();
+    /// The surface at pixels of a traced view: the field at the hits (pixel evaluation) or the
+    /// learned maps sampled there (texture evaluation), in pixel order of the hits.
+    void evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs) const;
+    /// Traces `camera` into `g` and evaluates the surface at its hits, in pixel order.
     void trace_and_evaluate(const Camera& camera, GBuffer& g, std::vector<FieldOutputs>& outputs) const;
+    bool texture_space() const { return m_config.evaluation == FieldEvaluation::Texture; }
 
     const TrainingTarget m_target;
     const RunConfig m_config;
@@ -126,6 +179,14 @@ private:
     const float m_patch_pixels_per_texel;
     std::unique_ptr<TextureField> m_field;
     std::unique_ptr<Adam> m_adam;
+    // Texture evaluation.
+    std::unique_ptr<TexelAtlas> m_atlas;
+    std::unique_ptr<LearnedMaps> m_maps;
+    Image m_albedo_target, m_tactile_target;
+    MipTexture m_albedo_target_texture;  // the input albedo over the atlas, as renders sample it
+    std::unique_ptr<Adam> m_residual_adam;
+    std::vector<float> m_residual_gradient;
+    bool m_maps_ready = false;
     std::unique_ptr<GuidanceBackend> m_visual_guidance;
     std::unique_ptr<GuidanceBackend> m_tactile_guidance;
     std::unique_ptr<Batch> m_batch;

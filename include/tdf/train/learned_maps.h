@@ -1,0 +1,72 @@
+#pragma once
+/// The albedo and tangent-space normal maps the texture-space optimizer learns (issue 10): what
+/// training renders sample is what the user gets. Per covered texel t of the atlas
+///   albedo(t) = field albedo(p_t) + r_albedo(t),   normal(t) = field normal(p_t) + r_normal(t)
+/// where p_t is the texel's surface point, the field is the hash grid + heads (3-D consistent,
+/// low frequencies, 2^15 entries per level hold ~1 M values) and r is a per-texel residual (the
+/// full resolution the 1024^2 maps need). Normals are left unnormalised in the map; lookups
+/// renormalise per pixel (spec 3.1 step 5), exports per texel. Gutter texels copy their source
+/// texel (TexelAtlas::fill_gutter) and the mip pyramids are box filters, as MipTexture builds them.
+#include <tdf/field/texture_field.h>
+#include <tdf/render/texture.h>
+#include <tdf/train/texel_atlas.h>
+
+#include <vector>
+
+namespace tdf {
+
+class LearnedMaps {
+public:
+    /// Residual values per covered texel: albedo RGB then normal XYZ.
+    static constexpr int kResidualPerTexel = 6;
+
+    /// Maps over `atlas` (borrowed; must outlive this). Residual zero, field not evaluated yet.
+    explicit LearnedMaps(const TexelAtlas& atlas);
+
+    const TexelAtlas& atlas() const { return *m_atlas; }
+    std::vector<float>& residual() { return m_residual; }
+    const std::vector<float>& residual() const { return m_residual; }
+
+    /// Evaluates `field` at every texel's surface point and keeps the encodings for backward().
+    void evaluate_field(const TextureField& field);
+    /// Sets the residual so that the maps equal `albedo` and `normal` (size x size, RGB) exactly
+    /// on every covered texel: r = target - field (call after evaluate_field).
+    void set_residual_to(const Image& albedo, const Image& normal);
+    /// Composes field + residual into the level-0 maps, fills the gutter and rebuilds the mips.
+    void update();
+
+    const MipTexture& albedo() const { return m_albedo; }
+    const MipTexture& normal() const { return m_normal; }
+    /// Level 0 as exported: albedo clamped to [0, 1], normals renormalised per texel.
+    Image export_albedo() const;
+    Image export_normal() const;
+
+    /// From dL/d(level-0 maps) (size x size, channels 0-2 used; the gutter's share is folded back
+    /// into its source texels, so the images are modified): adds dL/d(residual) to `d_residual` (resized
+    /// to residual().size() when empty) and, when `d_field` is given, the per-texel upstream
+    /// gradients of the field outputs (albedo, normal) in atlas texel order.
+    void backward(Image& d_albedo, Image& d_normal, std::vector<float>& d_residual,
+                  std::vector<FieldOutputGrads>* d_field) const;
+    /// The Jacobi (diagonal Gauss-Newton) update of the residual: `d_albedo` and `d_normal` hold
+    /// per texel the gradient (channels 0-2) and the loss's curvature summed over the texel's
+    /// footprint (channel 3), gutter already folded by backward(). Each texel with curvature
+    /// moves by -step x gradient / (curvature + damping): the coverage-weighted mean of what its
+    /// pixels ask for. Texels not seen this iteration do not move (no momentum: no speckle).
+    void jacobi_step(const Image& d_albedo, const Image& d_normal, float step);
+    /// dL/d(field parameters) for per-texel output gradients from backward(), using the encodings
+    /// of the last evaluate_field() (parameters unchanged since).
+    void field_backward(const TextureField& field, const std::vector<FieldOutputGrads>& d_field,
+                        std::vector<float>& gradient) const;
+    /// The field's outputs at the texels from the last evaluate_field().
+    const std::vector<FieldOutputs>& field_outputs() const { return m_field_outputs; }
+
+private:
+    const TexelAtlas* m_atlas;
+    std::vector<float> m_residual;
+    std::vector<FieldOutputs> m_field_outputs;
+    FieldCache m_cache;
+    Image m_albedo_level0, m_normal_level0;
+    MipTexture m_albedo, m_normal;
+};
+
+}  // namespace tdf

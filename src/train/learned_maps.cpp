@@ -1,0 +1,139 @@
+#include <tdf/train/learned_maps.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+
+#include <algorithm>
+
+namespace tdf {
+
+namespace {
+constexpr std::size_t kTexelGrain = 8192;
+}  // namespace
+
+LearnedMaps::LearnedMaps(const TexelAtlas& atlas)
+    : m_atlas(&atlas),
+      m_residual(atlas.covered_count() * kResidualPerTexel, 0.0f),
+      m_field_outputs(atlas.covered_count()),
+      m_albedo_level0(atlas.size, atlas.size, 3, 0.5f),
+      m_normal_level0(atlas.size, atlas.size, 3, 0.0f) {
+    for (FieldOutputs& o : m_field_outputs) o = FieldOutputs{{0.5f, 0.5f, 0.5f}, {0, 0, 1}, {0, 0}};
+}
+
+void LearnedMaps::evaluate_field(const TextureField& field) {
+    field.evaluate(m_atlas->points.data(), m_atlas->points.size(), m_field_outputs.data(), m_cache);
+}
+
+void LearnedMaps::set_residual_to(const Image& albedo, const Image& normal) {
+    const TexelAtlas& a = *m_atlas;
+    TDF_CHECK(albedo.width() == a.size && normal.width() == a.size && albedo.channels() == 3 && normal.channels() == 3);
+    parallel_for(a.covered_count(), kTexelGrain, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const std::size_t t = a.texels[k];
+            float* r = m_residual.data() + k * kResidualPerTexel;
+            for (int c = 0; c < 3; ++c) {
+                r[c] = albedo.data()[3 * t + std::size_t(c)] - m_field_outputs[k].albedo[c];
+                r[3 + c] = normal.data()[3 * t + std::size_t(c)] - m_field_outputs[k].normal[c];
+            }
+        }
+    });
+}
+
+void LearnedMaps::update() {
+    const TexelAtlas& a = *m_atlas;
+    parallel_for(a.covered_count(), kTexelGrain, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const std::size_t t = a.texels[k];
+            const float* r = m_residual.data() + k * kResidualPerTexel;
+            for (int c = 0; c < 3; ++c) {
+                m_albedo_level0.data()[3 * t + std::size_t(c)] = m_field_outputs[k].albedo[c] + r[c];
+                m_normal_level0.data()[3 * t + std::size_t(c)] = m_field_outputs[k].normal[c] + r[3 + c];
+            }
+        }
+    });
+    a.fill_gutter(m_albedo_level0);
+    a.fill_gutter(m_normal_level0);
+    m_albedo.assign(m_albedo_level0);
+    m_normal.assign(m_normal_level0);
+}
+
+Image LearnedMaps::export_albedo() const {
+    Image out = m_albedo_level0;
+    for (float& v : out.values()) v = std::clamp(v, 0.0f, 1.0f);
+    return out;
+}
+
+Image LearnedMaps::export_normal() const {
+    Image out = m_normal_level0;
+    for (std::size_t p = 0; p < out.pixel_count(); ++p) {
+        float* n = out.data() + 3 * p;
+        const Vec3f u = safe_normalize(Vec3f{n[0], n[1], n[2]});
+        n[0] = u.x, n[1] = u.y, n[2] = u.z;
+    }
+    return out;
+}
+
+void LearnedMaps::backward(Image& d_albedo, Image& d_normal, std::vector<float>& d_residual,
+                           std::vector<FieldOutputGrads>* d_field) const {
+    const TexelAtlas& a = *m_atlas;
+    TDF_CHECK(d_albedo.channels() >= 3 && d_normal.channels() >= 3);
+    a.fold_gutter_gradient(d_albedo);
+    a.fold_gutter_gradient(d_normal);
+    if (d_residual.empty()) d_residual.assign(m_residual.size(), 0.0f);
+    TDF_CHECK_EQ(d_residual.size(), m_residual.size());
+    if (d_field) d_field->assign(a.covered_count(), FieldOutputGrads{});
+    const std::size_t ca = std::size_t(d_albedo.channels()), cn = std::size_t(d_normal.channels());
+    parallel_for(a.covered_count(), kTexelGrain, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const std::size_t t = a.texels[k];
+            float* dr = d_residual.data() + k * kResidualPerTexel;
+            const float* ga = d_albedo.data() + ca * t;
+            const float* gn = d_normal.data() + cn * t;
+            for (int c = 0; c < 3; ++c) {
+                dr[c] += ga[c];
+                dr[3 + c] += gn[c];
+            }
+            if (d_field) {
+                FieldOutputGrads& g = (*d_field)[k];
+                g.d_albedo = {ga[0], ga[1], ga[2]};
+                g.d_normal = {gn[0], gn[1], gn[2]};
+            }
+        }
+    });
+}
+
+void LearnedMaps::jacobi_step(const Image& d_albedo, const Image& d_normal, float step) {
+    const TexelAtlas& a = *m_atlas;
+    TDF_CHECK(d_albedo.channels() == 4 && d_normal.channels() == 4);
+    // Damping: a texel seen by a tenth of the typical hit moves by at most about a tenth as much.
+    const auto damping = [&](const Image& d) {
+        double sum = 0;
+        std::size_t seen = 0;
+        for (std::size_t k = 0; k < a.covered_count(); ++k) {
+            const float c = d.data()[4 * std::size_t(a.texels[k]) + 3];
+            if (c > 0.0f) sum += c, ++seen;
+        }
+        return seen ? float(0.1 * sum / double(seen)) : 1.0f;
+    };
+    const float la = damping(d_albedo), ln = damping(d_normal);
+    parallel_for(a.covered_count(), kTexelGrain, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const std::size_t t = a.texels[k];
+            float* r = m_residual.data() + k * kResidualPerTexel;
+            const float* ga = d_albedo.data() + 4 * t;
+            const float* gn = d_normal.data() + 4 * t;
+            if (ga[3] > 0.0f)
+                for (int c = 0; c < 3; ++c) r[c] -= step * ga[c] / (ga[3] + la);
+            if (gn[3] > 0.0f)
+                for (int c = 0; c < 3; ++c) r[3 + c] -= step * gn[c] / (gn[3] + ln);
+        }
+    });
+}
+
+void LearnedMaps::field_backward(const TextureField& field, const std::vector<FieldOutputGrads>& d_field,
+                                 std::vector<float>& gradient) const {
+    TDF_CHECK_EQ(d_field.size(), m_atlas->covered_count());
+    field.backward(m_atlas->points.data(), d_field.data(), d_field.size(), gradient, m_cache);
+}
+
+}  // namespace tdf

@@ -1,0 +1,154 @@
+#include <tdf/train/texture_fidelity.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/vec.h>
+#include <tdf/guidance/image_filters.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace tdf {
+
+namespace {
+
+double psnr_over(const Image& a, const Image& b, const std::vector<std::uint8_t>& covered) {
+    double sum = 0;
+    std::size_t count = 0;
+    for (std::size_t t = 0; t < covered.size(); ++t) {
+        if (!covered[t]) continue;
+        for (int c = 0; c < 3; ++c) {
+            const double e = double(a.data()[3 * t + std::size_t(c)]) - b.data()[3 * t + std::size_t(c)];
+            sum += e * e;
+        }
+        count += 3;
+    }
+    const double mse = count ? sum / double(count) : 0.0;
+    return 10.0 * std::log10(1.0 / std::max(mse, 1e-12));
+}
+
+// Mean over covered neighbour pairs of the summed |difference| of the channels, horizontal plus
+// vertical (the script's `hf`). `pair_ok` further restricts which texels count.
+template <typename Include>
+double mean_abs_difference(const Image& image, const std::vector<std::uint8_t>& covered, Include include) {
+    const int w = image.width(), h = image.height(), ch = image.channels();
+    double sx = 0, sy = 0;
+    std::size_t nx = 0, ny = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t t = std::size_t(y) * std::size_t(w) + std::size_t(x);
+            if (!covered[t] || !include(t)) continue;
+            if (x + 1 < w && covered[t + 1] && include(t + 1)) {
+                double d = 0;
+                for (int c = 0; c < ch; ++c) d += std::fabs(double(image.data()[(t + 1) * std::size_t(ch) + std::size_t(c)]) -
+                                                            image.data()[t * std::size_t(ch) + std::size_t(c)]);
+                sx += d, ++nx;
+            }
+            if (y + 1 < h && covered[t + std::size_t(w)] && include(t + std::size_t(w))) {
+                double d = 0;
+                for (int c = 0; c < ch; ++c)
+                    d += std::fabs(double(image.data()[(t + std::size_t(w)) * std::size_t(ch) + std::size_t(c)]) -
+                                   image.data()[t * std::size_t(ch) + std::size_t(c)]);
+                sy += d, ++ny;
+            }
+        }
+    return (nx ? sx / double(nx) : 0.0) + (ny ? sy / double(ny) : 0.0);
+}
+
+Image unit_normals(const Image& n) {
+    Image out = n;
+    for (std::size_t p = 0; p < out.pixel_count(); ++p) {
+        float* v = out.data() + 3 * p;
+        const Vec3f u = normalize_or_zero({v[0], v[1], v[2]}, 1e-12f);
+        v[0] = u.x, v[1] = u.y, v[2] = u.z;
+    }
+    return out;
+}
+
+}  // namespace
+
+TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albedo_target, const Image& normal,
+                                         const Image& normal_target, const std::vector<std::uint8_t>& covered,
+                                         float lowpass_sigma) {
+    const int w = albedo.width(), h = albedo.height();
+    if (albedo_target.width() != w || albedo_target.height() != h || albedo.channels() != 3 ||
+        albedo_target.channels() != 3 || covered.size() != albedo.pixel_count())
+        throw_error("texture fidelity: the albedo maps and the coverage differ in size");
+    TextureFidelity f;
+    std::size_t compared = 0;
+    for (std::uint8_t c : covered) compared += c ? 1 : 0;
+    f.coverage = double(compared) / double(std::max<std::size_t>(covered.size(), 1));
+    f.albedo_psnr = psnr_over(albedo, albedo_target, covered);
+    const Image everywhere(w, h, 1, 1.0f);
+    f.albedo_psnr_lowpass = psnr_over(gaussian_blur_masked(albedo, everywhere, lowpass_sigma),
+                                      gaussian_blur_masked(albedo_target, everywhere, lowpass_sigma), covered);
+    const auto all = [](std::size_t) { return true; };
+    f.albedo_hf_ratio = mean_abs_difference(albedo, covered, all) /
+                        std::max(mean_abs_difference(albedo_target, covered, all), 1e-12);
+    if (normal.empty() || normal_target.empty()) return f;
+    if (normal.width() != w || normal.height() != h || normal_target.width() != w || normal_target.height() != h)
+        throw_error("texture fidelity: the normal maps differ in size from the albedo maps");
+    const Image n = unit_normals(normal), m = unit_normals(normal_target);
+    std::vector<double> cosines;
+    cosines.reserve(compared);
+    for (std::size_t t = 0; t < covered.size(); ++t) {
+        if (!covered[t]) continue;
+        const float* a = n.data() + 3 * t;
+        const float* b = m.data() + 3 * t;
+        cosines.push_back(double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]);
+    }
+    double sum = 0;
+    for (double c : cosines) sum += c;
+    f.normal_mean_cos = cosines.empty() ? 0.0 : sum / double(cosines.size());
+    if (!cosines.empty()) {
+        const std::size_t rank = std::size_t(0.1 * double(cosines.size() - 1));
+        std::nth_element(cosines.begin(), cosines.begin() + std::ptrdiff_t(rank), cosines.end());
+        f.normal_p10_cos = cosines[rank];
+    }
+    f.normal_hf_ratio =
+        mean_abs_difference(n, covered, all) / std::max(mean_abs_difference(m, covered, all), 1e-12);
+
+    // Flat relief: no texel within kFlatRadius (Chebyshev) steeper than 1 degree, so detail that
+    // relief-aware shading spreads around a bump (a few texels) does not count as added on flat.
+    constexpr int kFlatRadius = 8;
+    const float flat_z = std::cos(1.0f * 3.14159265f / 180.0f);
+    std::vector<std::uint8_t> steep(covered.size(), 0), steep_rows(covered.size(), 0);
+    for (std::size_t t = 0; t < covered.size(); ++t) steep[t] = m.data()[3 * t + 2] < flat_z ? 1 : 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            std::uint8_t any = 0;
+            for (int dx = -kFlatRadius; dx <= kFlatRadius && !any; ++dx) {
+                const int xx = x + dx;
+                if (xx >= 0 && xx < w) any = steep[std::size_t(y) * std::size_t(w) + std::size_t(xx)];
+            }
+            steep_rows[std::size_t(y) * std::size_t(w) + std::size_t(x)] = any;
+        }
+    std::vector<std::uint8_t> flat(covered.size(), 0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            std::uint8_t any = 0;
+            for (int dy = -kFlatRadius; dy <= kFlatRadius && !any; ++dy) {
+                const int yy = y + dy;
+                if (yy >= 0 && yy < h) any = steep_rows[std::size_t(yy) * std::size_t(w) + std::size_t(x)];
+            }
+            flat[std::size_t(y) * std::size_t(w) + std::size_t(x)] = any ? 0 : 1;
+        }
+    std::size_t flat_count = 0;
+    for (std::size_t t = 0; t < covered.size(); ++t) flat_count += (flat[t] && covered[t]) ? 1 : 0;
+    f.flat_fraction = double(flat_count) / double(std::max<std::size_t>(compared, 1));
+    Image added(w, h, 3);
+    for (std::size_t i = 0; i < added.values().size(); ++i) added.values()[i] = albedo.values()[i] - albedo_target.values()[i];
+    const auto is_flat = [&](std::size_t t) { return flat[t] != 0; };
+    f.albedo_added_hf_flat = mean_abs_difference(added, covered, is_flat);
+    f.albedo_hf_flat = mean_abs_difference(albedo_target, covered, is_flat);
+    return f;
+}
+
+Json TextureFidelity::to_json() const {
+    return {{"albedo_psnr_db", albedo_psnr},         {"albedo_psnr_lowpass_db", albedo_psnr_lowpass},
+            {"albedo_hf_ratio", albedo_hf_ratio},    {"albedo_added_hf_where_flat", albedo_added_hf_flat},
+            {"albedo_hf_where_flat", albedo_hf_flat}, {"normal_mean_cosine", normal_mean_cos},
+            {"normal_p10_cosine", normal_p10_cos},   {"normal_hf_ratio", normal_hf_ratio},
+            {"flat_fraction", flat_fraction}, {"coverage", coverage}};
+}
+
+}  // namespace tdf
