@@ -1,5 +1,7 @@
 #include <tdf/render/renderer.h>
 
+#include <cmath>
+
 #include <tdf/render/material_sampling.h>
 
 #include <tdf/core/error.h>
@@ -172,7 +174,10 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
                 Vec3f p{0, 0, 1};
                 if (mat.tactile) {
                     float texel[kMaxTextureChannels];
-                    mat.tactile->sample_trilinear_at(g.uv[i], lod.of(*mat.tactile), texel, tactile_max_level);
+                    // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
+                    const float scale = mat.tactile_layout.uv_scale;
+                    mat.tactile->sample_trilinear_at(g.uv[i] * scale, lod.of(*mat.tactile) + std::log2(scale), texel,
+                                                     tactile_max_level);
                     p = {texel[0], texel[1], texel[2]};
                     if (training) p = safe_normalize(p);  // spec 3.1 step 5
                 }

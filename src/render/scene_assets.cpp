@@ -7,7 +7,10 @@
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_io.h>
+#include <tdf/render/material_sampling.h>
 #include <tdf/render/shading.h>
+
+#include <cmath>
 
 #include <filesystem>
 
@@ -21,6 +24,33 @@ Image read_checked(const std::string& path, const std::string& scene, const char
     return image;
 }
 }  // namespace
+
+TactileLayoutTransform resolve_tactile_layout(const SceneDescription& d, const TriangleMesh& mesh, int map_width,
+                                              float map_mm_per_pixel) {
+    TactileLayoutTransform layout;
+    const auto it = d.sections.find("tactile_layout");
+    if (it == d.sections.end() || it->second.is_null()) return layout;
+    const Json& section = it->second;
+    if (!section.is_object()) throw_error("{}: tactile_layout must be an object", d.path);
+    const std::string mode = section.value("mode", std::string("atlas"));
+    if (mode == "atlas") return layout;
+    if (mode != "physical")
+        throw_error("{}: tactile_layout.mode must be one of atlas, physical, got '{}'", d.path, mode);
+    const float mm_per_unit = section.value("mm_per_unit", 0.0f);
+    if (!(mm_per_unit > 0) || !std::isfinite(mm_per_unit))
+        throw_error("{}: tactile_layout.mode=physical needs tactile_layout.mm_per_unit > 0 (millimetres per mesh unit)",
+                    d.path);
+    const float given = section.value("mm_per_pixel", 0.0f);
+    const float mm_per_pixel = given > 0 ? given : map_mm_per_pixel;
+    if (!(mm_per_pixel > 0) || !std::isfinite(mm_per_pixel))
+        throw_error("{}: tactile_layout.mode=physical needs the tactile map's millimetres per pixel: '{}' has no "
+                    "tdf:mm_per_pixel metadata (make it with `tdf tactile`) and tactile_layout.mm_per_pixel is not set",
+                    d.path, d.tactile_images.front());
+    layout.uv_scale = physical_tactile_uv_scale(mesh, mm_per_unit, map_width, mm_per_pixel);
+    log_info("tactile map at physical size: {:.1f} mm wide, repeated {:.2f} times across the atlas",
+             double(map_width) * mm_per_pixel, layout.uv_scale);
+    return layout;
+}
 
 std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
     auto assets = std::make_unique<SceneAssets>();
@@ -70,8 +100,10 @@ std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
     if (!d.tactile_images.empty()) {
         const std::string& path = d.tactile_images.front();
         if (!std::filesystem::exists(path)) throw_error("{}: tactile image '{}' does not exist", d.path, path);
-        assets->tactile = MipTexture(load_tactile_map(path).normals);
+        const TactileMap map = load_tactile_map(path);
+        assets->tactile = MipTexture(map.normals);
         m.tactile = &assets->tactile;
+        m.tactile_layout = resolve_tactile_layout(d, assets->mesh, map.normals.width(), map.mm_per_pixel);
         if (d.tactile_images.size() > 1)
             log_info("{}: rendering the first of {} tactile images", d.path, d.tactile_images.size());
     }

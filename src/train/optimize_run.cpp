@@ -92,20 +92,6 @@ void run_optimize(const OptimizeOptions& options) {
     target.scene = assets->scene.get();
     target.material = &assets->material;
     target.prompt = make_prompt(description.mesh, description.tactile_images.front());
-    if (config.tactile_layout == TactileLayout::Physical) {
-        const float mm_per_pixel = config.tactile_mm_per_pixel > 0
-                                       ? config.tactile_mm_per_pixel
-                                       : load_tactile_map(description.tactile_images.front()).mm_per_pixel;
-        if (!(mm_per_pixel > 0))
-            throw_error("{}: tactile_layout.mode=physical needs the tactile map's millimetres per pixel: '{}' has no "
-                        "tdf:mm_per_pixel metadata (make it with `tdf tactile`) and tactile_layout.mm_per_pixel is not set",
-                        options.scene_path, description.tactile_images.front());
-        target.tactile_layout.uv_scale =
-            physical_tactile_uv_scale(assets->mesh, config.mm_per_unit, assets->tactile.width(), mm_per_pixel);
-        log_info("tactile map at physical size: {:.1f} mm wide, repeated {:.2f} times across the atlas",
-                 double(assets->tactile.width()) * mm_per_pixel, target.tactile_layout.uv_scale);
-    }
-
     Json resolved = description.to_json();
     const Json config_json = config.to_json();
     for (auto it = config_json.begin(); it != config_json.end(); ++it) resolved[it.key()] = *it;

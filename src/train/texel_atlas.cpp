@@ -135,7 +135,8 @@ Image albedo_target(const TexelAtlas& atlas, const SurfaceMaterial& material, co
     return map;
 }
 
-Image tactile_target(const TexelAtlas& atlas, const SurfaceMaterial& material, const TactileLayoutTransform& layout) {
+Image tactile_target(const TexelAtlas& atlas, const SurfaceMaterial& material) {
+    const TactileLayoutTransform& layout = material.tactile_layout;
     Image map(atlas.size, atlas.size, 3, 0.0f);
     for (std::size_t t = 0; t < map.pixel_count(); ++t) map.data()[3 * t + 2] = 1.0f;
     if (material.tactile) {

@@ -41,7 +41,7 @@ TangentFrame frame_at(const GBuffer& g, std::size_t i) { return {g.tangent[i], g
 // The target tactile normal of a hit pixel as the training renderer builds it: sampled over the
 // whole pyramid, renormalised (spec 3.1 step 5), in tangent space ...
 Vec3f target_tangent_normal(const TrainingTarget& t, const GBuffer& g, std::size_t i) {
-    return safe_normalize(sample_tactile(*t.material, g, i, -1, t.tactile_layout));
+    return safe_normalize(sample_tactile(*t.material, g, i, -1));
 }
 
 // ... and composed with the pixel's frame, in view space.
@@ -93,35 +93,11 @@ struct Trainer::Batch {
     std::vector<std::uint32_t> fit_texels;  // matching phase: the texels sampled this iteration
 };
 
-namespace {
-
-/// sqrt(3-D area / UV area): the mean surface length of one UV unit.
-double mesh_units_per_uv_unit(const TriangleMesh& mesh) {
-    double area_3d = 0, area_uv = 0;
-    for (std::size_t f = 0; f < mesh.triangles.size() && mesh.has_uvs(); ++f) {
-        const Vec3i& t = mesh.triangles[f];
-        const Vec3i& u = mesh.uv_triangles[f];
-        area_3d += triangle_area(mesh.positions[std::size_t(t.x)], mesh.positions[std::size_t(t.y)],
-                                 mesh.positions[std::size_t(t.z)]);
-        area_uv += 0.5 * std::fabs(signed_uv_area2(mesh.uvs[std::size_t(u.x)], mesh.uvs[std::size_t(u.y)],
-                                                   mesh.uvs[std::size_t(u.z)]));
-    }
-    if (!(area_uv > 0) || !(area_3d > 0)) throw_error("{}: the UV atlas has no area", mesh.source_path);
-    return std::sqrt(area_3d / area_uv);
-}
-
-}  // namespace
-
-float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int map_width_pixels,
-                                float mm_per_pixel) {
-    const double uv_mm = mesh_units_per_uv_unit(mesh) * double(mm_per_unit);
-    return float(uv_mm / (double(map_width_pixels) * double(mm_per_pixel)));
-}
-
 float patch_pixels_per_texel(const TrainingTarget& target, const RunConfig& config) {
     const MipTexture* map = target.material->tactile;
     if (!map || map->empty() || !target.mesh->has_uvs()) return 0.0f;
-    const double texels_per_uv_unit = std::sqrt(double(map->width()) * double(map->height())) * target.tactile_layout.uv_scale;
+    const double texels_per_uv_unit =
+        std::sqrt(double(map->width()) * double(map->height())) * target.material->tactile_layout.uv_scale;
     const double units_per_texel = mesh_units_per_uv_unit(*target.mesh) / texels_per_uv_unit;
     const double pixels_per_unit = double(config.patch_resolution) / (2.0 * double(config.patch_half_extent));
     return float(units_per_texel * pixels_per_unit);
@@ -149,7 +125,7 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
                         target.mesh->source_path);
         m_atlas = std::make_unique<TexelAtlas>(TexelAtlas::build(*target.mesh, config.texture_size));
         m_albedo_target = tdf::albedo_target(*m_atlas, *target.material, *target.mesh);
-        m_tactile_target = tdf::tactile_target(*m_atlas, *target.material, target.tactile_layout);
+        m_tactile_target = tdf::tactile_target(*m_atlas, *target.material);
         m_albedo_target_texture = MipTexture(m_albedo_target);
         m_maps = std::make_unique<LearnedMaps>(*m_atlas);
         m_residual_adam = std::make_unique<Adam>(m_maps->residual().size(), hyper);

@@ -7,12 +7,6 @@
 
 namespace tdf {
 
-/// How a tactile map is laid on the surface: uv' = uv * uv_scale. 1 covers the UV atlas once (the
-/// reference, spec 1.3.5); a larger value repeats a tileable map at its physical size.
-struct TactileLayoutTransform {
-    float uv_scale = 1.0f;
-};
-
 /// A texel's first three channels as RGB, or grey for 1-2 channel textures.
 inline Vec3f texel_rgb(const MipTexture& texture, const float* texel) {
     return texture.channels() >= 3 ? Vec3f{texel[0], texel[1], texel[2]} : Vec3f{texel[0], texel[0], texel[0]};
@@ -31,10 +25,20 @@ inline Vec3f vertex_color_at(const TriangleMesh& mesh, const GBuffer& g, std::si
 Vec3f sample_albedo(const SurfaceMaterial& material, const TriangleMesh& mesh, const GBuffer& g, std::size_t i,
                     bool mipmapped);
 
-/// Tangent-space tactile normal of pixel `i` (a hit), trilinear with LOD from the ray
-/// differentials, capped at `max_level` (-1 = whole pyramid); (0,0,1) without a map. Not
-/// renormalised: callers that match the training renderer apply safe_normalize (spec 3.1 step 5).
-Vec3f sample_tactile(const SurfaceMaterial& material, const GBuffer& g, std::size_t i, int max_level = -1,
-                     const TactileLayoutTransform& layout = {});
+/// Tangent-space tactile normal of pixel `i` (a hit), laid by material.tactile_layout, trilinear
+/// with LOD from the ray differentials, capped at `max_level` (-1 = whole pyramid); (0,0,1)
+/// without a map. Not renormalised: callers that match the training renderer apply
+/// safe_normalize (spec 3.1 step 5).
+Vec3f sample_tactile(const SurfaceMaterial& material, const GBuffer& g, std::size_t i, int max_level = -1);
+
+/// sqrt(3-D area / UV area): the mean surface length of one UV unit. Throws tdf::Error when the
+/// mesh has no UV area.
+double mesh_units_per_uv_unit(const TriangleMesh& mesh);
+
+/// The UV scale that lays a tactile map at its physical size (tactile_layout.mode = physical): the
+/// atlas's mean surface size per UV unit, mesh_units_per_uv_unit x mm_per_unit, divided by the
+/// map's width in millimetres. Throws tdf::Error when the mesh has no UV area.
+float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int map_width_pixels,
+                                float mm_per_pixel);
 
 }  // namespace tdf

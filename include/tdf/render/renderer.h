@@ -17,6 +17,13 @@
 namespace tdf {
 
 /// What the surface looks like. Textures are borrowed and must outlive the renderer.
+/// How a tactile map is laid on the surface: uv' = uv * uv_scale. 1 covers the UV atlas once (the
+/// reference, spec 1.3.5); a larger value repeats a tileable map at its physical size
+/// (physical_tactile_uv_scale). The renderer and the optimizer read it from the same material.
+struct TactileLayoutTransform {
+    float uv_scale = 1.0f;
+};
+
 struct SurfaceMaterial {
     enum class AlbedoSource { Texture, VertexColors, Constant };
     AlbedoSource albedo_source = AlbedoSource::Constant;
@@ -24,6 +31,7 @@ struct SurfaceMaterial {
     Vec3f albedo_constant{0.5f, 0.5f, 0.5f};
     /// Tangent-space normal map decoded to [-1, 1] (x/255*2-1, spec 1.3); nullptr = flat (0,0,1).
     const MipTexture* tactile = nullptr;
+    TactileLayoutTransform tactile_layout;  ///< how `tactile` repeats over the atlas
     /// Label map (RGB in [0,1]) for the label pass; nullptr = zeros.
     const MipTexture* label = nullptr;
 };

@@ -34,6 +34,13 @@ struct SceneAssets {
 std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& description);
 
 
+/// The tactile layout a scene asks for (its "tactile_layout" section: mode atlas, or physical with
+/// mm_per_unit and mm_per_pixel, the latter defaulting to the map's own metadata), for a map of
+/// `map_width` pixels. One transform for `tdf render` and `tdf optimize`. Throws tdf::Error naming
+/// the scene when the physical size cannot be known.
+TactileLayoutTransform resolve_tactile_layout(const SceneDescription& description, const TriangleMesh& mesh,
+                                              int map_width, float map_mm_per_pixel);
+
 /// The light of view `index` (LightSpec modes). magic3d draws from
 /// Rng::stream(seed, 0x4c49474854 + index) so lights and views have separate streams.
 Light scene_light(const SceneDescription& description, const SceneView& view, std::size_t index);

@@ -49,8 +49,9 @@ struct TexelAtlas {
 /// colours interpolated, or the constant; gutter filled. RGB, size x size.
 Image albedo_target(const TexelAtlas& atlas, const SurfaceMaterial& material, const TriangleMesh& mesh);
 
-/// The tactile map laid over the atlas as the trainer lays it (uv * layout.uv_scale), sampled with
-/// a one-texel footprint and renormalised (spec 3.1 step 5); (0,0,1) without a map; gutter filled.
-Image tactile_target(const TexelAtlas& atlas, const SurfaceMaterial& material, const TactileLayoutTransform& layout);
+/// The tactile map laid over the atlas as the renderer and trainer lay it (uv x
+/// material.tactile_layout.uv_scale), sampled with a one-texel footprint and renormalised (spec 3.1
+/// step 5); (0,0,1) without a map; gutter filled.
+Image tactile_target(const TexelAtlas& atlas, const SurfaceMaterial& material);
 
 }  // namespace tdf

@@ -42,15 +42,8 @@ struct TrainingTarget {
     const TriangleMesh* mesh = nullptr;     ///< with UVs, normals and tangents
     const EmbreeScene* scene = nullptr;     ///< built from `mesh`
     const SurfaceMaterial* material = nullptr;  ///< base albedo source + tactile map (decoded)
-    TactileLayoutTransform tactile_layout;  ///< how the tactile map repeats over the atlas
     std::string prompt;                     ///< visual guidance text (spec 5.7)
 };
-
-/// The UV scale that lays a tactile map at its physical size (TactileLayout::Physical): the
-/// atlas's mean surface size per UV unit, sqrt(3-D area / UV area) x mm_per_unit, divided by
-/// the map's width in millimetres. Throws tdf::Error when the mesh has no UV area.
-float physical_tactile_uv_scale(const TriangleMesh& mesh, float mm_per_unit, int map_width_pixels,
-                                float mm_per_pixel);
 
 /// How many patch pixels one texel of the tactile map spans on the surface: the patch window
 /// (patch_resolution pixels over 2 patch_half_extent units) against the map's mean texel size on
