@@ -10,6 +10,7 @@ cd "$(dirname "$0")/.."
 TDF=${TDF:-./build/tdf}
 OUT=${1:-build/ray_vs_raster}
 shift || true
+EXTRA=("$@")
 mkdir -p "$OUT"
 for scene in scenes/*/scene.json; do
   name=$(basename "$(dirname "$scene")")
@@ -17,7 +18,7 @@ for scene in scenes/*/scene.json; do
     r=${variant%%:*}
     aa=${variant##*:}
     dir="$OUT/$name/${r}_aa_${aa}"
-    if ! "$TDF" --quiet render "$scene" -o "$dir" "renderer=$r" "antialias=$aa" "$@" 2>"$OUT/$name.err"; then
+    if ! "$TDF" --quiet render "$scene" -o "$dir" "renderer=$r" "antialias=$aa" "${EXTRA[@]}" 2>"$OUT/$name.err"; then
       echo "skipping $name: $(head -1 "$OUT/$name.err")" >&2
       continue 2
     fi
@@ -25,10 +26,10 @@ for scene in scenes/*/scene.json; do
   done
   for pair in "ray_aa_false raster_aa_false" "ray_aa_false raster_aa_true" "ray_aa_true raster_aa_true" \
               "raster_aa_false raster_aa_true"; do
-    set -- $pair
+    read -r left right <<< "$pair"
     for erode in 0 1 2; do
-      "$TDF" compare "$OUT/$name/$1" "$OUT/$name/$2" --json --fail 0.004 --erode-mask "$erode" \
-        > "$OUT/$name/$1_vs_$2_erode$erode.json" || true
+      "$TDF" compare "$OUT/$name/$left" "$OUT/$name/$right" --json --fail 0.004 --erode-mask "$erode" \
+        > "$OUT/$name/${left}_vs_${right}_erode$erode.json" || true
     done
   done
 done
@@ -53,5 +54,5 @@ for f in sorted(out.glob("*/*_vs_*_erode*.json")):
             r[2] = max(r[2], layer["fail_percent"])
     for layer, (psnr, max_error, over) in rows.items():
         print(f"| {scene} | {layer} | {pair.replace('_aa_false', '').replace('_aa_true', '+AA')} | {erode} "
-              f"| {psnr:.1f} | {max_error:.3g} | {over:.2f} |")
+              f"| {psnr:.1f} | {max_error:.3g} | {over:.3g} |")
 PY

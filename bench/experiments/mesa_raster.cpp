@@ -61,11 +61,9 @@ int main() {
     if (!get_platform_display) fail("eglGetPlatformDisplayEXT");
     EGLDisplay display = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     if (display == EGL_NO_DISPLAY || !eglInitialize(display, nullptr, nullptr)) fail("eglInitialize");
-    const EGLint config_attributes[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
-    EGLConfig config;
-    EGLint count = 0;
-    if (!eglChooseConfig(display, config_attributes, &config, 1, &count) || count < 1)
-        fail("eglChooseConfig");
+    // No config needed for a context that only draws into framebuffer objects
+    // (EGL_KHR_no_config_context).
+    EGLConfig config = EGL_NO_CONFIG_KHR;
     if (!eglBindAPI(EGL_OPENGL_API)) fail("eglBindAPI");
     const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
                                          3,

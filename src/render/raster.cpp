@@ -79,18 +79,20 @@ bool setup_triangle(const Vec4f* clip, const Vec3d* hom, const Vec3i& tri, int w
     // Pixel bounds: the projected vertices when all are in front of the camera plane, else the
     // whole image (the edge functions still clip exactly).
     t.x0 = 0, t.y0 = 0, t.x1 = width - 1, t.y1 = height - 1;
-    if (c0.w > 0 && c1.w > 0 && c2.w > 0) {
+    if (c0.w > 0 && c1.w > 0 && c2.w > 0) {  // NaN-free: the mesh loaders reject non-finite input
         double lo_x = std::numeric_limits<double>::max(), hi_x = -lo_x, lo_y = lo_x, hi_y = -lo_x;
         for (const Vec3d* v : {&v0, &v1, &v2}) {
             const double X = v->x / v->z, Y = v->y / v->z;
             lo_x = std::min(lo_x, X), hi_x = std::max(hi_x, X);
             lo_y = std::min(lo_y, Y), hi_y = std::max(hi_y, Y);
         }
-        // Centres j + 0.5 inside [lo, hi]; one pixel of slack against rounding of the division.
-        t.x0 = int(std::max(0.0, std::floor(lo_x - 0.5) - 1));
-        t.x1 = int(std::min(double(width - 1), std::ceil(hi_x - 0.5) + 1));
-        t.y0 = int(std::max(0.0, std::floor(lo_y - 0.5) - 1));
-        t.y1 = int(std::min(double(height - 1), std::ceil(hi_y - 0.5) + 1));
+        // Centres j + 0.5 inside [lo, hi], widened to whole pixels outward (floor / ceil), which
+        // absorbs the rounding of the division; the edge functions decide exactly.
+        // Clamped on both sides before the int conversion (projections can be huge).
+        auto lo = [](double v, int n) { return int(std::clamp(std::floor(v - 0.5), 0.0, double(n))); };
+        auto hi = [](double v, int n) { return int(std::clamp(std::ceil(v - 0.5), -1.0, double(n - 1))); };
+        t.x0 = lo(lo_x, width), t.x1 = hi(hi_x, width);
+        t.y0 = lo(lo_y, height), t.y1 = hi(hi_y, height);
     }
     return t.x0 <= t.x1 && t.y0 <= t.y1;
 }
