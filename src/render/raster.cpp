@@ -238,15 +238,16 @@ void rasterize(const std::vector<Vec4f>& clip, const std::vector<Vec3i>& triangl
     });
 }
 
-void interpolate_tile(const RasterBuffer& raster, const TriangleMesh& mesh, const Camera& camera, int x0,
-                      int y0, int x1, int y1, GBuffer& tile) {
-    TDF_CHECK(x0 >= 0 && y0 >= 0 && x1 <= raster.width && y1 <= raster.height && x0 < x1 && y0 < y1);
-    if (tile.width != x1 - x0 || tile.height != y1 - y0) tile.resize(x1 - x0, y1 - y0);
+namespace {
+
+// dr.interpolate of the pixels [x0, x1) x [y0, y1) into out.index(x - ox, y - oy).
+void interpolate_region(const RasterBuffer& raster, const TriangleMesh& mesh, const Camera& camera, int x0,
+                        int y0, int x1, int y1, GBuffer& tile, int ox, int oy) {
     const bool has_tangents = !mesh.tangents.empty();
     const bool has_uvs = mesh.has_uvs();
     for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
-            const std::size_t i = tile.index(x - x0, y - y0);
+            const std::size_t i = tile.index(x - ox, y - oy);
             const std::size_t o = raster.index(x, y);
             const int f = raster.triangle(o);
             if (f < 0) {
@@ -295,14 +296,21 @@ void interpolate_tile(const RasterBuffer& raster, const TriangleMesh& mesh, cons
         }
 }
 
+}  // namespace
+
+void interpolate_tile(const RasterBuffer& raster, const TriangleMesh& mesh, const Camera& camera, int x0,
+                      int y0, int x1, int y1, GBuffer& tile) {
+    TDF_CHECK(x0 >= 0 && y0 >= 0 && x1 <= raster.width && y1 <= raster.height && x0 < x1 && y0 < y1);
+    if (tile.width != x1 - x0 || tile.height != y1 - y0) tile.resize(x1 - x0, y1 - y0);
+    interpolate_region(raster, mesh, camera, x0, y0, x1, y1, tile, x0, y0);
+}
+
 void raster_gbuffer(const TriangleMesh& mesh, const Camera& camera, GBuffer& out) {
     RasterBuffer raster;
     rasterize(clip_positions(mesh, camera), mesh.triangles, camera.width, camera.height, raster);
     out.resize(camera.width, camera.height);
     parallel_for_tiles(camera.width, camera.height, kRasterTile, [&](int x0, int y0, int x1, int y1) {
-        static thread_local GBuffer tile;
-        interpolate_tile(raster, mesh, camera, x0, y0, x1, y1, tile);
-        out.copy_tile(tile, x0, y0);
+        interpolate_region(raster, mesh, camera, x0, y0, x1, y1, out, 0, 0);
     });
 }
 

@@ -33,8 +33,6 @@ struct GBuffer {
     std::size_t index(int x, int y) const { return std::size_t(y) * std::size_t(width) + std::size_t(x); }
     /// Sets pixel i to background.
     void clear_pixel(std::size_t i);
-    /// Copies every attribute of `tile` to the pixels [x0, x0 + tile.width) x [y0, y0 + tile.height).
-    void copy_tile(const GBuffer& tile, int x0, int y0);
 };
 
 }  // namespace tdf
