@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <utility>
 #include <vector>
 
 using namespace tdf;
@@ -171,14 +172,31 @@ void main() { out_rast = vec4(v_bary, gl_FragCoord.z * 2.0 - 1.0, float(gl_Primi
 
     std::size_t covered_gl = 0, covered_own = 0, same_id = 0, both = 0;
     double max_bary = 0;
+    std::vector<double> bary_diffs;
+    // Pixels where the two pick different triangles, and how many of them have the other's
+    // triangle as a 4-neighbour in tdf's image (i.e. lie on a shared edge).
+    std::size_t differ = 0, differ_on_edge = 0;
     for (std::size_t i = 0; i < own.rast.size(); ++i) {
         const int id_gl = int(gl_rast[4 * i + 3]) - 1, id_own = own.triangle(i);
         covered_gl += id_gl >= 0;
         covered_own += id_own >= 0;
         if (id_gl < 0 || id_own < 0) continue;
         ++both;
-        if (id_gl != id_own) continue;
+        if (id_gl != id_own) {
+            ++differ;
+            const int x = int(i % kSize), y = int(i / kSize);
+            bool edge = false;
+            for (const auto [dx, dy] : {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+                const int xx = x + dx, yy = y + dy;
+                if (xx >= 0 && yy >= 0 && xx < kSize && yy < kSize && own.triangle(own.index(xx, yy)) == id_gl)
+                    edge = true;
+            }
+            differ_on_edge += edge;
+            continue;
+        }
         ++same_id;
+        bary_diffs.push_back(std::max(std::fabs(gl_rast[4 * i] - own.rast[i].x),
+                                      std::fabs(gl_rast[4 * i + 1] - own.rast[i].y)));
         max_bary = std::max({max_bary,
                              double(std::fabs(gl_rast[4 * i] - own.rast[i].x)),
                              double(std::fabs(gl_rast[4 * i + 1] - own.rast[i].y))});
@@ -199,6 +217,12 @@ void main() { out_rast = vec4(v_bary, gl_FragCoord.z * 2.0 - 1.0, float(gl_Primi
         both,
         100.0 * double(same_id) / double(std::max<std::size_t>(1, both)),
         max_bary);
+    std::sort(bary_diffs.begin(), bary_diffs.end());
+    if (!bary_diffs.empty())
+        std::printf("barycentric difference: median %.3g, 99th percentile %.3g; %zu pixels differ in triangle, %zu "
+                    "of them next to a pixel of the other triangle\n",
+                    bary_diffs[bary_diffs.size() / 2], bary_diffs[bary_diffs.size() * 99 / 100], differ,
+                    differ_on_edge);
     eglTerminate(display);
     return 0;
 }
