@@ -17,9 +17,10 @@
 ///   perspective-correct barycentrics, p = u p0 + v p1 + (1 - u - v) p2, and all zeros on the
 ///   background; rast_db = (du/dx, du/dy, dv/dx, dv/dy) per pixel, analytic (not differenced).
 ///
-/// Not bit-identical to a GPU: a GPU snaps vertices to 1/256 pixel before the coverage test, so
-/// centres within ~1/512 pixel of an edge may go the other way, and it computes barycentrics in
-/// its own float order (differences ~1e-7).
+/// Not bit-identical to a GPU: a GPU snaps vertices to a sub-pixel grid before the coverage test,
+/// so centres very close to an edge may go the other way, and it computes barycentrics in its own
+/// float order (against Mesa's llvmpipe: the same triangle on 99.92 % of the pixels, barycentric
+/// differences of median 3e-6; README "tdf render").
 ///
 /// Parallel: triangles are set up in fixed chunks, binned to 64x64-pixel tiles in chunk order,
 /// and each tile rasterized by one thread in triangle order, so the result is bit-identical on
