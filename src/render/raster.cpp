@@ -301,6 +301,7 @@ void interpolate_region(const RasterBuffer& raster, const TriangleMesh& mesh, co
 void interpolate_tile(const RasterBuffer& raster, const TriangleMesh& mesh, const Camera& camera, int x0,
                       int y0, int x1, int y1, GBuffer& tile) {
     TDF_CHECK(x0 >= 0 && y0 >= 0 && x1 <= raster.width && y1 <= raster.height && x0 < x1 && y0 < y1);
+    TDF_CHECK_EQ(mesh.normals.size(), mesh.positions.size());
     if (tile.width != x1 - x0 || tile.height != y1 - y0) tile.resize(x1 - x0, y1 - y0);
     interpolate_region(raster, mesh, camera, x0, y0, x1, y1, tile, x0, y0);
 }
@@ -308,6 +309,7 @@ void interpolate_tile(const RasterBuffer& raster, const TriangleMesh& mesh, cons
 void raster_gbuffer(const TriangleMesh& mesh, const Camera& camera, GBuffer& out) {
     RasterBuffer raster;
     rasterize(clip_positions(mesh, camera), mesh.triangles, camera.width, camera.height, raster);
+    TDF_CHECK_EQ(mesh.normals.size(), mesh.positions.size());
     out.resize(camera.width, camera.height);
     parallel_for_tiles(camera.width, camera.height, kRasterTile, [&](int x0, int y0, int x1, int y1) {
         interpolate_region(raster, mesh, camera, x0, y0, x1, y1, out, 0, 0);
