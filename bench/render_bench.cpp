@@ -1,13 +1,16 @@
-// Rays per second of a full multi-pass render at 512x512 against bare Embree closest-hit
-// tracing of the same primary rays (the same 16-wide packets and tiles). Scene: a 100k-triangle
-// UV sphere with a 1024^2 albedo and tactile map, seen from radius 2.5 (about 60% of the rays
-// hit). `bench/run.sh` prints every benchmark's ratio to BM_Baseline_EmbreePackets.
+// Rays (pixels) per second of a full multi-pass render at 512x512 against bare Embree closest-hit
+// tracing of the same primary rays (the same packets and tiles: 16-wide where the CPU has
+// AVX-512, 8-wide otherwise, chosen at run time). Scene: a 100k-triangle UV sphere with a 1024^2
+// albedo and tactile map, seen from radius 2.5 (about 72% of the rays hit). The ray and raster
+// producers and their full renders run on the same scene and camera in one run, plus the
+// pieces of the floor: the G-buffer alone, and the two trilinear lookups per hit pixel alone.
+// `bench/run.sh` prints every benchmark's ratio to BM_Baseline_EmbreePackets.
+#include <benchmark/benchmark.h>
 #include <tdf/core/parallel.h>
+#include <tdf/render/raster.h>
 #include <tdf/render/renderer.h>
 #include <tdf/render/trace.h>
 #include <tdf/scene/procedural_mesh.h>
-
-#include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <memory>
@@ -90,8 +93,53 @@ void BM_GBuffer(benchmark::State& state) {
     set_rays(state);
 }
 
+void BM_Raster_Visibility(benchmark::State& state) {
+    const BenchScene& s = BenchScene::get();
+    ThreadLimit limit(int(state.range(0)));
+    RasterBuffer raster;
+    for (auto _ : state) {
+        rasterize(clip_positions(s.mesh, s.camera), s.mesh.triangles, kSize, kSize, raster);
+        benchmark::DoNotOptimize(raster.rast.data());
+    }
+    set_rays(state);
+}
+
+void BM_Raster_GBuffer(benchmark::State& state) {
+    const BenchScene& s = BenchScene::get();
+    ThreadLimit limit(int(state.range(0)));
+    GBuffer g;
+    for (auto _ : state) {
+        raster_gbuffer(s.mesh, s.camera, g);
+        benchmark::DoNotOptimize(g.mask.data());
+    }
+    set_rays(state);
+}
+
+// The floor of the texture work: the albedo and tactile trilinear lookups of every hit pixel
+// of a precomputed G-buffer (same tiles and threads as the renderer), nothing else.
+void BM_Floor_TwoTrilinearLookups(benchmark::State& state) {
+    const BenchScene& s = BenchScene::get();
+    ThreadLimit limit(int(state.range(0)));
+    const GBuffer g = trace_gbuffer(s.scene, s.mesh, s.camera);
+    std::vector<float> out(g.pixel_count() * 6);
+    for (auto _ : state) {
+        parallel_for_tiles(kSize, kSize, kTraceTile, [&](int x0, int y0, int x1, int y1) {
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const std::size_t i = g.index(x, y);
+                    if (!(g.mask[i] > 0.f)) continue;
+                    const float lod = s.albedo.level_of_detail(g.duv_dx[i], g.duv_dy[i]);
+                    s.albedo.sample_trilinear_at(g.uv[i], lod, &out[6 * i]);
+                    s.tactile.sample_trilinear_at(g.uv[i], lod, &out[6 * i + 3]);
+                }
+        });
+        benchmark::DoNotOptimize(out.data());
+    }
+    set_rays(state);
+}
+
 void render_passes(benchmark::State& state, ShadingMode mode, const std::vector<Pass>& passes,
-                   bool textured = true) {
+                   bool textured = true, Visibility visibility = Visibility::Ray, bool antialias = false) {
     const BenchScene& s = BenchScene::get();
     ThreadLimit limit(int(state.range(0)));
     SurfaceMaterial material;
@@ -102,6 +150,8 @@ void render_passes(benchmark::State& state, ShadingMode mode, const std::vector<
     }
     RenderSettings settings;
     settings.shading = mode;
+    settings.visibility = visibility;
+    settings.antialias = antialias;
     const Renderer renderer(s.mesh, s.scene, material, settings);
     const Light light{Light::Kind::Point, {2, 3, 4}, 0.5f};
     Frame frame;  // reused: steady-state cost without allocating the output images
@@ -112,23 +162,35 @@ void render_passes(benchmark::State& state, ShadingMode mode, const std::vector<
     set_rays(state);
 }
 
-const std::vector<Pass> kTenPasses = {Pass::Albedo,        Pass::Lambertian,    Pass::Mask,
-                                      Pass::Depth,         Pass::Normal,        Pass::Tangent,
-                                      Pass::Uv,            Pass::TactileNormal, Pass::ShadingNormal,
+const std::vector<Pass> kTenPasses = {Pass::Albedo,
+                                      Pass::Lambertian,
+                                      Pass::Mask,
+                                      Pass::Depth,
+                                      Pass::Normal,
+                                      Pass::Tangent,
+                                      Pass::Uv,
+                                      Pass::TactileNormal,
+                                      Pass::ShadingNormal,
                                       Pass::ShadingNormalViewspace};
 
 // Every pass but label (no label map here): the "full multi-pass render".
 void BM_Render_Training(benchmark::State& state) { render_passes(state, ShadingMode::Training, kTenPasses); }
-void BM_Render_Visualizer(benchmark::State& state) { render_passes(state, ShadingMode::Visualizer, kTenPasses); }
+void BM_Render_Visualizer(benchmark::State& state) {
+    render_passes(state, ShadingMode::Visualizer, kTenPasses);
+}
 // Only the shaded image and coverage (still both texture lookups and the TBN frame).
 void BM_Render_LambertianOnly(benchmark::State& state) {
     render_passes(state, ShadingMode::Training, {Pass::Lambertian, Pass::Mask});
 }
 
-#define TDF_RENDER_BENCH(fn) BENCHMARK(fn)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()
+#define TDF_RENDER_BENCH(fn) \
+    BENCHMARK(fn)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()
 TDF_RENDER_BENCH(BM_Baseline_EmbreePackets);
 TDF_RENDER_BENCH(BM_EmbreeSingleRays);
 TDF_RENDER_BENCH(BM_GBuffer);
+TDF_RENDER_BENCH(BM_Raster_Visibility);
+TDF_RENDER_BENCH(BM_Raster_GBuffer);
+TDF_RENDER_BENCH(BM_Floor_TwoTrilinearLookups);
 TDF_RENDER_BENCH(BM_Render_Training);
 TDF_RENDER_BENCH(BM_Render_Visualizer);
 TDF_RENDER_BENCH(BM_Render_LambertianOnly);
@@ -137,6 +199,20 @@ void BM_Render_LambertianUntextured(benchmark::State& state) {
     render_passes(state, ShadingMode::Training, {Pass::Lambertian, Pass::Mask}, false);
 }
 TDF_RENDER_BENCH(BM_Render_LambertianUntextured);
+// The same 10-pass training render with the raster producer, without and with dr.antialias, and
+// the ray producer with dr.antialias.
+void BM_Render_Training_Raster(benchmark::State& state) {
+    render_passes(state, ShadingMode::Training, kTenPasses, true, Visibility::Raster, false);
+}
+void BM_Render_Training_RasterAA(benchmark::State& state) {
+    render_passes(state, ShadingMode::Training, kTenPasses, true, Visibility::Raster, true);
+}
+void BM_Render_Training_RayAA(benchmark::State& state) {
+    render_passes(state, ShadingMode::Training, kTenPasses, true, Visibility::Ray, true);
+}
+TDF_RENDER_BENCH(BM_Render_Training_Raster);
+TDF_RENDER_BENCH(BM_Render_Training_RasterAA);
+TDF_RENDER_BENCH(BM_Render_Training_RayAA);
 
 }  // namespace
 

@@ -1,15 +1,19 @@
-// `tdf compare a.exr b.exr`: idiff-style image comparison (README "tdf compare").
-// Exit codes: 0 pass, 1 fail (or a file / channel error), 2 size mismatch.
-#include "commands.h"
-
+// `tdf compare A B`: idiff-style comparison of two images, or of two folders of images paired by
+// relative path and layer (README "tdf compare").
+// Exit codes: 0 pass; 1 fail (also unreadable files, different channel sets, bad options); 2 size
+// mismatch of two single images. Folders: 0 when every file passes, else 1.
 #include <tdf/core/config.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
+#include <tdf/render/folder_compare.h>
 #include <tdf/render/image_compare.h>
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+
+#include "commands.h"
 
 namespace tdf::app {
 
@@ -21,50 +25,84 @@ struct CompareCliOptions {
     std::string diff;
     float diff_scale = 16.f;
     bool json = false;
+    bool allow_missing = false;
+    bool allow_extra = false;
 };
 
 constexpr int kExitPass = 0;
 constexpr int kExitFail = 1;
 constexpr int kExitSizeMismatch = 2;
 
-std::vector<ExrLayer> read_layers(const std::string& path) {
-    if (lower_extension(path) == ".exr") return read_exr_layers(path);
-    // PNG / JPEG: one unnamed layer with R, G, B, A names by channel count.
-    Image image = read_image(path);
-    static const std::vector<std::vector<std::string>> names = {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
-    return {{"", names[std::size_t(image.channels() - 1)], std::move(image)}};
-}
+// JSON has no infinity: a number, or null for +infinity (PSNR of equal values, no hardfail).
+Json number_or_null(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
 
 Json stats_json(const ChannelStats& s) {
-    return {{"channel", s.name},
+    return {{"name", s.name},
             {"mean_error", s.mean_error},
             {"rms_error", s.rms_error},
-            {"psnr", std::isinf(s.psnr) ? Json("inf") : Json(s.psnr)},
-            {"max_error", std::isinf(s.max_error) ? Json("inf") : Json(s.max_error)},
-            {"max_pixel", {s.max_x, s.max_y}}};
+            {"psnr", number_or_null(s.psnr)},
+            {"psnr_infinite", std::isinf(s.psnr)},
+            {"max_error", s.max_error},
+            {"max_pixel", {s.max_x, s.max_y}},
+            {"compared_values", s.count},
+            {"nonfinite_values", s.nonfinite},
+            {"first_nonfinite_pixel", s.nonfinite ? Json{s.nonfinite_x, s.nonfinite_y} : Json(nullptr)}};
 }
 
-int run_compare(const CompareCliOptions& o) {
-    const std::vector<ExrLayer> a = read_layers(o.a);
-    const std::vector<ExrLayer> b = read_layers(o.b);
+Json layer_json(const LayerResult& l) {
+    Json j = stats_json(l.stats);
+    j["layer"] = l.name;
+    j["failed_pixels"] = l.failed_pixels;
+    j["fail_percent"] = l.fail_percent;
+    j["result"] = l.passed ? "pass" : "fail";
+    return j;
+}
+
+Json thresholds_json(const CompareCliOptions& o) {
+    return {{"fail", o.compare.fail},
+            {"failpercent", o.compare.failpercent},
+            {"hardfail", number_or_null(o.compare.hardfail)},
+            {"erode_mask", o.compare.erode_mask},
+            {"allow_nonfinite", o.compare.allow_nonfinite},
+            {"allow_missing", o.allow_missing},
+            {"allow_extra", o.allow_extra}};
+}
+
+std::string psnr_text(double psnr) { return std::isinf(psnr) ? "inf" : fmt::format("{:.2f}", psnr); }
+
+int run_compare_files(const CompareCliOptions& o) {
+    const std::vector<ExrLayer> a = read_comparable_image(o.a);
+    const std::vector<ExrLayer> b = read_comparable_image(o.b);
+    if (a.empty()) throw_error("{}: no layers", o.a);
+    if (b.empty()) throw_error("{}: no layers", o.b);
     const Image& ia = a.front().image;
     const Image& ib = b.front().image;
     if (ia.width() != ib.width() || ia.height() != ib.height()) {
         if (o.json)
-            std::printf("%s\n", Json({{"result", "size_mismatch"},
-                                      {"a_size", {ia.width(), ia.height()}},
-                                      {"b_size", {ib.width(), ib.height()}}})
-                                    .dump(2)
-                                    .c_str());
-        std::fprintf(stderr, "tdf compare: %s is %dx%d but %s is %dx%d\n", o.a.c_str(), ia.width(), ia.height(),
-                     o.b.c_str(), ib.width(), ib.height());
+            std::printf("%s\n",
+                        Json({{"result", "size_mismatch"},
+                              {"a", o.a},
+                              {"b", o.b},
+                              {"a_size", {ia.width(), ia.height()}},
+                              {"b_size", {ib.width(), ib.height()}}})
+                            .dump(2)
+                            .c_str());
+        std::fprintf(stderr,
+                     "tdf compare: %s is %dx%d but %s is %dx%d\n",
+                     o.a.c_str(),
+                     ia.width(),
+                     ia.height(),
+                     o.b.c_str(),
+                     ib.width(),
+                     ib.height());
         return kExitSizeMismatch;
     }
     const CompareResult r = compare_layers(a, b, o.compare, o.a, o.b);
     if (!o.diff.empty()) write_exr(o.diff, difference_layers(a, b, o.diff_scale));
     if (o.json) {
-        Json channels = Json::array();
+        Json channels = Json::array(), layers = Json::array();
         for (const auto& s : r.channels) channels.push_back(stats_json(s));
+        for (const auto& l : r.layers) layers.push_back(layer_json(l));
         Json report = {{"result", r.passed ? "pass" : "fail"},
                        {"a", o.a},
                        {"b", o.b},
@@ -72,27 +110,178 @@ int run_compare(const CompareCliOptions& o) {
                        {"compared_pixels", r.compared_pixels},
                        {"failed_pixels", r.failed_pixels},
                        {"fail_percent", r.fail_percent},
-                       {"thresholds",
-                        {{"fail", o.compare.fail},
-                         {"failpercent", o.compare.failpercent},
-                         {"hardfail", std::isinf(o.compare.hardfail) ? Json("inf") : Json(o.compare.hardfail)},
-                         {"erode_mask", o.compare.erode_mask}}},
+                       {"thresholds", thresholds_json(o)},
                        {"overall", stats_json(r.overall)},
+                       {"layers", layers},
                        {"channels", channels}};
         std::printf("%s\n", report.dump(2).c_str());
     } else {
-        std::printf("Comparing \"%s\" and \"%s\" (%dx%d, %zu pixels compared)\n", o.a.c_str(), o.b.c_str(), r.width,
-                    r.height, r.compared_pixels);
-        std::printf("  %-32s %12s %12s %9s %12s  %s\n", "channel", "mean error", "RMS", "PSNR", "max error", "at");
-        for (const auto& s : r.channels)
-            std::printf("  %-32s %12.6g %12.6g %9.2f %12.6g  (%d, %d)\n", s.name.c_str(), s.mean_error, s.rms_error,
-                        s.psnr, s.max_error, s.max_x, s.max_y);
-        std::printf("  %-32s %12.6g %12.6g %9.2f %12.6g  (%d, %d)\n", "all", r.overall.mean_error, r.overall.rms_error,
-                    r.overall.psnr, r.overall.max_error, r.overall.max_x, r.overall.max_y);
-        std::printf("  %zu pixels (%.4g%%) over %g\n%s\n", r.failed_pixels, r.fail_percent, double(o.compare.fail),
+        std::printf("Comparing \"%s\" and \"%s\" (%dx%d, %zu pixels compared)\n",
+                    o.a.c_str(),
+                    o.b.c_str(),
+                    r.width,
+                    r.height,
+                    r.compared_pixels);
+        std::printf("  %-32s %12s %12s %9s %12s  %-12s %s\n",
+                    "channel",
+                    "mean error",
+                    "RMS",
+                    "PSNR",
+                    "max error",
+                    "at",
+                    "non-finite");
+        auto row = [](const ChannelStats& s) {
+            std::printf("  %-32s %12.6g %12.6g %9s %12.6g  %-12s %zu\n",
+                        s.name.c_str(),
+                        s.mean_error,
+                        s.rms_error,
+                        psnr_text(s.psnr).c_str(),
+                        s.max_error,
+                        fmt::format("({}, {})", s.max_x, s.max_y).c_str(),
+                        s.nonfinite);
+        };
+        for (const auto& s : r.channels) row(s);
+        row(r.overall);
+        std::printf("  %zu pixels (%.4g%%) over %g\n%s\n",
+                    r.failed_pixels,
+                    r.fail_percent,
+                    double(o.compare.fail),
                     r.passed ? "PASS" : "FAILURE");
     }
     return r.passed ? kExitPass : kExitFail;
+}
+
+int run_compare_folders(const CompareCliOptions& o) {
+    FolderCompareOptions fo;
+    fo.compare = o.compare;
+    fo.allow_missing = o.allow_missing;
+    fo.allow_extra = o.allow_extra;
+    fo.diff_folder = o.diff;
+    fo.diff_scale = o.diff_scale;
+    const FolderComparison r = compare_folders(o.a, o.b, fo);
+    const FolderTotals& t = r.totals;
+    if (o.json) {
+        Json files = Json::array();
+        for (const FileComparison& f : r.files) {
+            Json j = {{"path", f.path},
+                      {"status", file_status_name(f.status)},
+                      {"result", f.passed ? "pass" : "fail"}};
+            if (!f.message.empty()) j["message"] = f.message;
+            if (f.status == FileComparison::Status::Compared) {
+                Json layers = Json::array();
+                for (const LayerResult& l : f.result.layers) layers.push_back(layer_json(l));
+                j["size"] = {f.result.width, f.result.height};
+                j["compared_pixels"] = f.result.compared_pixels;
+                j["failed_pixels"] = f.result.failed_pixels;
+                j["fail_percent"] = f.result.fail_percent;
+                j["overall"] = stats_json(f.result.overall);
+                j["layers"] = layers;
+                j["missing_layers"] = f.missing_layers;
+                j["extra_layers"] = f.extra_layers;
+            }
+            if (!f.diff_path.empty()) j["diff"] = f.diff_path;
+            files.push_back(j);
+        }
+        Json totals = {{"files", t.files},
+                       {"compared", t.compared},
+                       {"passed", t.passed},
+                       {"failed", t.failed},
+                       {"missing", t.missing},
+                       {"extra", t.extra},
+                       {"size_mismatch", t.size_mismatch},
+                       {"errors", t.errors},
+                       {"rows", t.rows},
+                       {"failed_rows", t.failed_rows},
+                       {"min_psnr", number_or_null(t.min_psnr)},
+                       {"overall", stats_json(t.overall)}};
+        Json report = {{"result", r.passed ? "pass" : "fail"},
+                       {"a", r.a},
+                       {"b", r.b},
+                       {"thresholds", thresholds_json(o)},
+                       {"files", files},
+                       {"totals", totals}};
+        std::printf("%s\n", report.dump(2).c_str());
+    } else {
+        std::printf("Comparing folders \"%s\" and \"%s\"\n", r.a.c_str(), r.b.c_str());
+        std::printf("  %-36s %-26s %9s %12s %-12s %9s  %s\n",
+                    "file",
+                    "pass",
+                    "PSNR",
+                    "max error",
+                    "at",
+                    "% over",
+                    "result");
+        for (const FileComparison& f : r.files) {
+            if (f.status != FileComparison::Status::Compared) {
+                std::printf("  %-36s %-26s %9s %12s %-12s %9s  %s%s%s\n",
+                            f.path.c_str(),
+                            "-",
+                            "-",
+                            "-",
+                            "-",
+                            "-",
+                            f.passed ? "ok: " : "FAIL: ",
+                            file_status_name(f.status),
+                            f.message.empty() ? "" : (" (" + f.message + ")").c_str());
+                continue;
+            }
+            for (const LayerResult& l : f.result.layers) {
+                std::string at = fmt::format("({}, {})", l.stats.max_x, l.stats.max_y);
+                std::string verdict = l.passed ? "pass" : "FAIL";
+                if (l.stats.nonfinite) verdict += fmt::format(" ({} non-finite)", l.stats.nonfinite);
+                std::printf("  %-36s %-26s %9s %12.6g %-12s %8.4g%%  %s\n",
+                            f.path.c_str(),
+                            l.name.empty() ? "(image)" : l.name.c_str(),
+                            psnr_text(l.stats.psnr).c_str(),
+                            l.stats.max_error,
+                            at.c_str(),
+                            l.fail_percent,
+                            verdict.c_str());
+            }
+            for (const auto& name : f.missing_layers)
+                std::printf("  %-36s %-26s %s\n",
+                            f.path.c_str(),
+                            name.c_str(),
+                            o.allow_missing ? "ok: missing in B" : "FAIL: missing in B");
+            for (const auto& name : f.extra_layers)
+                std::printf("  %-36s %-26s %s\n",
+                            f.path.c_str(),
+                            name.c_str(),
+                            o.allow_extra ? "ok: extra in B" : "FAIL: extra in B");
+            if (!f.diff_path.empty())
+                std::printf("  %-36s diff written to %s\n", f.path.c_str(), f.diff_path.c_str());
+        }
+        std::printf(
+            "  %zu files: %zu compared, %zu passed, %zu failed (%zu missing, %zu extra, %zu size mismatches, "
+            "%zu errors); %zu of %zu rows failed; overall PSNR %s, max error %.6g, worst row PSNR %s\n%s\n",
+            t.files,
+            t.compared,
+            t.passed,
+            t.failed,
+            t.missing,
+            t.extra,
+            t.size_mismatch,
+            t.errors,
+            t.failed_rows,
+            t.rows,
+            psnr_text(t.overall.psnr).c_str(),
+            t.overall.max_error,
+            psnr_text(t.min_psnr).c_str(),
+            r.passed ? "PASS" : "FAILURE");
+    }
+    return r.passed ? kExitPass : kExitFail;
+}
+
+int run_compare(const CompareCliOptions& o) {
+    validate_compare_options(o.compare);
+    if (!(std::isfinite(o.diff_scale) && o.diff_scale > 0))
+        throw_error("--diff-scale must be a finite number > 0, got {}", o.diff_scale);
+    const bool da = std::filesystem::is_directory(o.a), db = std::filesystem::is_directory(o.b);
+    if (da != db) throw_error("{} and {} must both be folders or both be images", o.a, o.b);
+    if (da) return run_compare_folders(o);
+    if (o.allow_missing || o.allow_extra)
+        throw_error("--allow-missing and --allow-extra apply to folders only");
+    return run_compare_files(o);
 }
 
 }  // namespace
@@ -100,23 +289,41 @@ int run_compare(const CompareCliOptions& o) {
 Command register_compare(CLI::App& root) {
     auto o = std::make_shared<CompareCliOptions>();
     Command command;
-    CLI::App* app = root.add_subcommand(
-        "compare",
-        "compare two images channel by channel like idiff (exit 0 pass, 1 fail or unreadable file, 2 size mismatch)");
-    app->add_option("a", o->a, "first image (EXR, PNG or JPEG)")->required();
-    app->add_option("b", o->b, "second image (same size and channel names)")->required();
-    app->add_option("--fail", o->compare.fail, "a pixel fails when a channel differs by more than this")
+    CLI::App* app =
+        root.add_subcommand("compare",
+                            "compare two images channel by channel like idiff, or two folders file by file "
+                            "and layer by layer (exit 0 "
+                            "pass, 1 fail / unreadable / bad option, 2 size mismatch of two images)");
+    app->add_option("a", o->a, "first image (EXR, PNG or JPEG) or folder")->required();
+    app->add_option("b", o->b, "second image (same size and channel names) or folder")->required();
+    app->add_option(
+           "--fail", o->compare.fail, "a pixel fails when a channel differs by more than this (finite, >= 0)")
         ->capture_default_str();
-    app->add_option("--failpercent", o->compare.failpercent, "percent of pixels allowed to fail")
-        ->check(CLI::Range(0.f, 100.f))
+    app->add_option("--failpercent", o->compare.failpercent, "percent of pixels allowed to fail, in [0, 100]")
         ->capture_default_str();
-    app->add_option("--hardfail", o->compare.hardfail, "fail when any difference exceeds this")->capture_default_str();
-    app->add_option("--erode-mask", o->compare.erode_mask,
+    app->add_option(
+           "--hardfail", o->compare.hardfail, "fail when any difference exceeds this (>= 0, inf = none)")
+        ->capture_default_str();
+    app->add_option("--erode-mask",
+                    o->compare.erode_mask,
                     "ignore pixels within N pixels of a silhouette (needs a mask layer)")
-        ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
-    app->add_option("--diff", o->diff, "write |a - b| * --diff-scale to this EXR");
-    app->add_option("--diff-scale", o->diff_scale, "scale of the difference image")->capture_default_str();
+    app->add_flag("--allow-nonfinite",
+                  o->compare.allow_nonfinite,
+                  "NaN vs NaN and equal infinities count as equal (otherwise any non-finite value fails)")
+        ->capture_default_str();
+    app->add_flag(
+           "--allow-missing", o->allow_missing, "folders: files or layers of A absent from B do not fail")
+        ->capture_default_str();
+    app->add_flag("--allow-extra", o->allow_extra, "folders: files or layers of B absent from A do not fail")
+        ->capture_default_str();
+    app->add_option(
+        "--diff",
+        o->diff,
+        "images: write |a - b| * --diff-scale to this EXR; folders: write <path>.diff.exr under this "
+        "folder for every failing file");
+    app->add_option("--diff-scale", o->diff_scale, "scale of the difference image (finite, > 0)")
+        ->capture_default_str();
     app->add_flag("--json", o->json, "print the report as JSON on stdout")->capture_default_str();
     command.app = app;
     command.run = [o] { return run_compare(*o); };

@@ -1,6 +1,4 @@
 // `tdf render scene.json -o out/ [key=value ...]`: one multi-layer EXR per view.
-#include "commands.h"
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
@@ -9,6 +7,8 @@
 #include <tdf/render/scene_assets.h>
 
 #include <filesystem>
+
+#include "commands.h"
 
 namespace tdf::app {
 
@@ -20,6 +20,7 @@ struct RenderOptions {
     std::vector<std::string> overrides;
     bool png = false;
     int turntable = 0;
+    std::string renderer;  // empty: the scene's
 };
 
 int run_render(const RenderOptions& o) {
@@ -30,12 +31,23 @@ int run_render(const RenderOptions& o) {
             overrides.emplace_back(clear);
         overrides.push_back(fmt::format("views.turntable.count={}", o.turntable));
     }
+    if (!o.renderer.empty()) overrides.push_back("renderer=\"" + o.renderer + "\"");
     const SceneDescription description = load_scene(o.scene, overrides);
     const auto assets = load_scene_assets(description);
-    log_info("scene {}: seed {}, {}x{}, ssaa {}, {} shading", o.scene, description.seed, description.width,
-             description.height, description.ssaa, description.shading);
-    log_info("mesh {}: {} vertices, {} triangles; {} views", description.mesh, assets->mesh.positions.size(),
-             assets->mesh.triangles.size(), assets->views.size());
+    log_info("scene {}: seed {}, {}x{}, ssaa {}, {} shading, {} visibility, antialias {}",
+             o.scene,
+             description.seed,
+             description.width,
+             description.height,
+             description.ssaa,
+             description.shading,
+             description.renderer,
+             description.antialias ? "on" : "off");
+    log_info("mesh {}: {} vertices, {} triangles; {} views",
+             description.mesh,
+             assets->mesh.positions.size(),
+             assets->mesh.triangles.size(),
+             assets->views.size());
     ensure_folder(o.output);
     const std::string resolved = o.output + "/resolved_scene.json";
     write_text_atomically(resolved, description.to_json().dump(2) + "\n");
@@ -69,13 +81,22 @@ Command register_render(CLI::App& root) {
     CLI::App* app = root.add_subcommand(
         "render", "render the passes of a scene file's views to multi-layer EXRs (view_000.exr, ...)");
     app->add_option("scene", options->scene, "scene file (JSON, README \"Scene file format\")")->required();
-    app->add_option("overrides", options->overrides, "scene overrides key=value (dotted keys, e.g. image.width=256)");
+    app->add_option(
+        "overrides", options->overrides, "scene overrides key=value (dotted keys, e.g. image.width=256)");
     app->add_option("-o,--output", options->output, "output folder")->required();
-    app->add_flag("--png", options->png, "also write 8-bit PNG previews view_NNN_<pass>.png")->capture_default_str();
-    app->add_option("--turntable", options->turntable,
+    app->add_flag("--png", options->png, "also write 8-bit PNG previews view_NNN_<pass>.png")
+        ->capture_default_str();
+    app->add_option("--turntable",
+                    options->turntable,
                     "replace the scene's views by N azimuths 360k/N at views.turntable.elevation")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
+    app->add_option(
+           "--renderer",
+           options->renderer,
+           "visibility: ray (Embree) or raster (nvdiffrast rules); overrides the scene's 'renderer' key "
+           "(default ray)")
+        ->check(CLI::IsMember({"ray", "raster"}));
     command.app = app;
     command.run = [options] { return run_render(*options); };
     return command;

@@ -1,11 +1,8 @@
-#include <tdf/render/renderer.h>
-
-#include <cmath>
-
-#include <tdf/render/material_sampling.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/render/material_sampling.h>
+#include <tdf/render/raster.h>
+#include <tdf/render/renderer.h>
 #include <tdf/render/resample.h>
 #include <tdf/render/shading.h>
 #include <tdf/render/trace.h>
@@ -13,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace tdf {
 
@@ -24,6 +22,16 @@ ShadingMode parse_shading_mode(const std::string& name) {
     if (name == "training") return ShadingMode::Training;
     if (name == "visualizer") return ShadingMode::Visualizer;
     throw_error("unknown shading mode '{}' (valid: training, visualizer)", name);
+}
+
+const char* visibility_name(Visibility visibility) {
+    return visibility == Visibility::Ray ? "ray" : "raster";
+}
+
+Visibility parse_visibility(const std::string& name) {
+    if (name == "ray") return Visibility::Ray;
+    if (name == "raster") return Visibility::Raster;
+    throw_error("unknown renderer '{}' (valid: ray, raster)", name);
 }
 
 Renderer::Renderer(const TriangleMesh& mesh, const EmbreeScene& scene, const SurfaceMaterial& material,
@@ -38,8 +46,10 @@ Renderer::Renderer(const TriangleMesh& mesh, const EmbreeScene& scene, const Sur
     if (textured && !mesh.has_uvs())
         throw_error("{}: textures need UVs but the mesh has none", mesh.source_path);
     if (material.tactile && material.tactile->channels() < 3)
-        throw_error("{}: the tactile normal map needs 3 channels, it has {}", mesh.source_path,
+        throw_error("{}: the tactile normal map needs 3 channels, it has {}",
+                    mesh.source_path,
                     material.tactile->channels());
+    if (settings.antialias) m_topology = EdgeTopology(mesh.triangles, mesh.positions.size());
 }
 
 namespace {
@@ -92,6 +102,113 @@ Vec3f sample_rgb(const MipTexture& tex, Vec2f uv, PixelLod& lod, bool mipmapped,
     return texel_rgb(tex, texel);
 }
 
+// Stage 2 of the renderer: turns G-buffer tiles into passes. Knows nothing about which
+// producer filled the tile.
+class TileShader {
+public:
+    TileShader(const TriangleMesh& mesh, const SurfaceMaterial& material, const RenderSettings& settings,
+               const Camera& camera, const Light& light, const Targets& targets)
+        : m_mesh(mesh),
+          m_mat(material),
+          m_camera(camera),
+          m_light(light),
+          m_targets(targets),
+          m_background(settings.background),
+          m_training(settings.shading == ShadingMode::Training),
+          m_tactile_max_level(m_training ? -1 : 5),  // spec 3.9: max_mip_level = 5
+          m_albedo_mipmapped(m_training),            // visualizer: plain bilinear
+          m_need_frame(targets.base[std::size_t(Pass::Lambertian)] ||
+                       targets.base[std::size_t(Pass::ShadingNormal)] ||
+                       targets.base[std::size_t(Pass::ShadingNormalViewspace)] ||
+                       targets.base[std::size_t(Pass::TactileNormal)]),
+          m_need_albedo(targets.base[std::size_t(Pass::Albedo)] ||
+                        targets.base[std::size_t(Pass::Lambertian)]) {}
+
+    // Shades tile `g` whose pixel (0, 0) is image pixel (x0, y0).
+    void shade(const GBuffer& g, int x0, int y0) const {
+        using Source = SurfaceMaterial::AlbedoSource;
+        const int x1 = x0 + g.width, y1 = y0 + g.height;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const std::size_t i = g.index(x - x0, y - y0);
+                const std::size_t px = std::size_t(y) * std::size_t(m_camera.width) + std::size_t(x);
+                const bool hit = g.mask[i] > 0.f;
+                PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
+                m_targets.coverage[px] = g.mask[i];
+                if (float* o = m_targets.at(Pass::Mask, px)) o[0] = g.mask[i];
+                if (float* o = m_targets.at(Pass::Depth, px)) o[0] = g.depth[i];
+                if (float* o = m_targets.at(Pass::Normal, px)) put3(o, g.normal[i]);
+                if (float* o = m_targets.at(Pass::Tangent, px)) put3(o, g.tangent[i]);
+                if (float* o = m_targets.at(Pass::Uv, px)) {
+                    o[0] = hit ? g.uv[i].x : 0.f;
+                    o[1] = hit ? 1.f - g.uv[i].y : 0.f;  // the reference's v' (spec 3.9)
+                }
+                if (float* o = m_targets.at(Pass::Label, px))
+                    put3(o,
+                         hit && m_mat.label
+                             ? sample_rgb(*m_mat.label, g.uv[i], lod, true, m_tactile_max_level)
+                             : Vec3f{});
+                Vec3f albedo = m_background;
+                if (m_need_albedo && hit) {
+                    if (m_mat.albedo_source == Source::Texture)
+                        albedo = sample_rgb(*m_mat.albedo, g.uv[i], lod, m_albedo_mipmapped, -1);
+                    else if (m_mat.albedo_source == Source::VertexColors)
+                        albedo = vertex_color_at(m_mesh, g, i);
+                    else
+                        albedo = m_mat.albedo_constant;
+                }
+                if (float* o = m_targets.at(Pass::Albedo, px)) put3(o, albedo);
+                if (!m_need_frame) continue;
+                if (!hit) {
+                    for (Pass p : {Pass::TactileNormal, Pass::ShadingNormal, Pass::ShadingNormalViewspace})
+                        if (float* o = m_targets.at(p, px)) put3(o, {});
+                    if (float* o = m_targets.at(Pass::Lambertian, px)) put3(o, m_background);
+                    continue;
+                }
+                Vec3f p{0, 0, 1};
+                if (m_mat.tactile) {
+                    float texel[kMaxTextureChannels];
+                    // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
+                    const float scale = m_mat.tactile_layout.uv_scale;
+                    m_mat.tactile->sample_trilinear_at(g.uv[i] * scale, lod.of(*m_mat.tactile) + std::log2(scale),
+                                                       texel, m_tactile_max_level);
+                    p = {texel[0], texel[1], texel[2]};
+                    if (m_training) p = safe_normalize(p);  // spec 3.1 step 5
+                }
+                if (float* o = m_targets.at(Pass::TactileNormal, px)) put3(o, p);
+                const Vec3f raw = shading_normal_unnormalized(g.tangent[i], g.normal[i], g.handedness[i], p);
+                const Vec3f n = safe_normalize(raw);
+                if (float* o = m_targets.at(Pass::ShadingNormal, px)) put3(o, n);
+                if (float* o = m_targets.at(Pass::ShadingNormalViewspace, px))
+                    put3(o,
+                         m_training ? normalize_or_zero(m_camera.world_to_camera_direction(n))
+                                    : m_camera.world_to_camera_direction(raw));
+                if (float* o = m_targets.at(Pass::Lambertian, px)) {
+                    const Vec3f l = m_light.kind == Light::Kind::Point
+                                        ? safe_normalize(m_light.vector - g.position[i])
+                                        : m_light.vector;
+                    const float shade = m_light.ambient + (1.f - m_light.ambient) * std::max(0.f, dot(n, l));
+                    const Vec3f c = albedo * shade;
+                    put3(o,
+                         {std::clamp(c.x, 0.f, 1.f), std::clamp(c.y, 0.f, 1.f), std::clamp(c.z, 0.f, 1.f)});
+                }
+            }
+    }
+
+private:
+    const TriangleMesh& m_mesh;
+    const SurfaceMaterial& m_mat;
+    const Camera& m_camera;
+    const Light& m_light;
+    const Targets& m_targets;
+    Vec3f m_background;
+    bool m_training;
+    int m_tactile_max_level;
+    bool m_albedo_mipmapped;
+    bool m_need_frame;
+    bool m_need_albedo;
+};
+
 }  // namespace
 
 Frame Renderer::render(const Camera& camera, const Light& light, const std::vector<Pass>& passes) const {
@@ -100,9 +217,11 @@ Frame Renderer::render(const Camera& camera, const Light& light, const std::vect
     return frame;
 }
 
-void Renderer::render(const Camera& camera, const Light& light, const std::vector<Pass>& passes, Frame& frame) const {
+void Renderer::render(const Camera& camera, const Light& light, const std::vector<Pass>& passes,
+                      Frame& frame) const {
     if (camera.width <= 0 || camera.height <= 0)
-        throw_error("image size {}x{} is empty (width and height must be positive)", camera.width, camera.height);
+        throw_error(
+            "image size {}x{} is empty (width and height must be positive)", camera.width, camera.height);
     // Reuse the frame's images when the layout matches: every pixel is overwritten below.
     const bool reuse = frame.passes == passes && frame.coverage.width() == camera.width &&
                        frame.coverage.height() == camera.height;
@@ -120,84 +239,100 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
         targets.channels[std::size_t(p)] = pass_channels(p);
     }
     targets.coverage = frame.coverage.data();
+    const TileShader shader(m_mesh, m_material, m_settings, camera, light, targets);
 
-    const bool training = m_settings.shading == ShadingMode::Training;
-    const int tactile_max_level = training ? -1 : 5;  // spec 3.9: max_mip_level = 5
-    const bool albedo_mipmapped = training;           // visualizer: plain bilinear
-    using Source = SurfaceMaterial::AlbedoSource;
-    const SurfaceMaterial& mat = m_material;
-    const bool need_frame = targets.base[std::size_t(Pass::Lambertian)] ||
-                            targets.base[std::size_t(Pass::ShadingNormal)] ||
-                            targets.base[std::size_t(Pass::ShadingNormalViewspace)] ||
-                            targets.base[std::size_t(Pass::TactileNormal)];
-    const bool need_albedo = targets.base[std::size_t(Pass::Albedo)] || targets.base[std::size_t(Pass::Lambertian)];
+    // Stage 1 (visibility): the producer that fills each G-buffer tile. The rasterizer draws the
+    // whole image once (it bins triangles to tiles itself); the tracer traces tile by tile.
+    const bool raster = m_settings.visibility == Visibility::Raster;
+    const bool antialias = m_settings.antialias;
+    // Per call, not thread_local: a caller may render several views in parallel, and the worker
+    // threads below must all read this call's buffer.
+    RasterBuffer raster_buffer;
+    std::vector<Vec4f> clip;
+    if (raster || antialias) clip = clip_positions(m_mesh, camera);
+    if (raster) rasterize(clip, m_mesh.triangles, camera.width, camera.height, raster_buffer);
+    auto produce_tile = [&](int x0, int y0, int x1, int y1, GBuffer& g) {
+        if (raster)
+            interpolate_tile(raster_buffer, m_mesh, camera, x0, y0, x1, y1, g);
+        else
+            trace_tile(m_scene, m_mesh, camera, x0, y0, x1, y1, g);
+    };
+    // What antialiasing needs from visibility: triangle ids and a depth ordered like z/w.
+    const std::size_t pixel_count = std::size_t(camera.width) * std::size_t(camera.height);
+    std::vector<int> aa_triangle(antialias ? pixel_count : 0);
+    std::vector<float> aa_depth(antialias ? pixel_count : 0);
 
+    // Stage 2 (shading): one path for both producers.
     parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
         // One small G-buffer per thread, reused across tiles and frames: stays in cache.
         static thread_local GBuffer g;
-        trace_tile(m_scene, m_mesh, camera, x0, y0, x1, y1, g);
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                const std::size_t i = g.index(x - x0, y - y0);
-                const std::size_t px = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
-                const bool hit = g.mask[i] > 0.f;
-                PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
-                targets.coverage[px] = g.mask[i];
-                if (float* o = targets.at(Pass::Mask, px)) o[0] = g.mask[i];
-                if (float* o = targets.at(Pass::Depth, px)) o[0] = g.depth[i];
-                if (float* o = targets.at(Pass::Normal, px)) put3(o, g.normal[i]);
-                if (float* o = targets.at(Pass::Tangent, px)) put3(o, g.tangent[i]);
-                if (float* o = targets.at(Pass::Uv, px)) {
-                    o[0] = hit ? g.uv[i].x : 0.f;
-                    o[1] = hit ? 1.f - g.uv[i].y : 0.f;  // the reference's v' (spec 3.9)
+        produce_tile(x0, y0, x1, y1, g);
+        shader.shade(g, x0, y0);
+        if (antialias)
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const std::size_t i = g.index(x - x0, y - y0);
+                    const std::size_t px = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
+                    aa_triangle[px] = g.triangle[i];
+                    aa_depth[px] = raster ? raster_buffer.rast[px].z : g.depth[i];
                 }
-                if (float* o = targets.at(Pass::Label, px))
-                    put3(o, hit && mat.label ? sample_rgb(*mat.label, g.uv[i], lod, true, tactile_max_level)
-                                             : Vec3f{});
-                Vec3f albedo = m_settings.background;
-                if (need_albedo && hit) {
-                    if (mat.albedo_source == Source::Texture)
-                        albedo = sample_rgb(*mat.albedo, g.uv[i], lod, albedo_mipmapped, -1);
-                    else if (mat.albedo_source == Source::VertexColors)
-                        albedo = vertex_color_at(m_mesh, g, i);
-                    else
-                        albedo = mat.albedo_constant;
-                }
-                if (float* o = targets.at(Pass::Albedo, px)) put3(o, albedo);
-                if (!need_frame) continue;
-                if (!hit) {
-                    for (Pass p : {Pass::TactileNormal, Pass::ShadingNormal, Pass::ShadingNormalViewspace})
-                        if (float* o = targets.at(p, px)) put3(o, {});
-                    if (float* o = targets.at(Pass::Lambertian, px)) put3(o, m_settings.background);
-                    continue;
-                }
-                Vec3f p{0, 0, 1};
-                if (mat.tactile) {
-                    float texel[kMaxTextureChannels];
-                    // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
-                    const float scale = mat.tactile_layout.uv_scale;
-                    mat.tactile->sample_trilinear_at(g.uv[i] * scale, lod.of(*mat.tactile) + std::log2(scale), texel,
-                                                     tactile_max_level);
-                    p = {texel[0], texel[1], texel[2]};
-                    if (training) p = safe_normalize(p);  // spec 3.1 step 5
-                }
-                if (float* o = targets.at(Pass::TactileNormal, px)) put3(o, p);
-                const Vec3f raw = shading_normal_unnormalized(g.tangent[i], g.normal[i], g.handedness[i], p);
-                const Vec3f n = safe_normalize(raw);
-                if (float* o = targets.at(Pass::ShadingNormal, px)) put3(o, n);
-                if (float* o = targets.at(Pass::ShadingNormalViewspace, px))
-                    put3(o, training ? normalize_or_zero(camera.world_to_camera_direction(n))
-                                     : camera.world_to_camera_direction(raw));
-                if (float* o = targets.at(Pass::Lambertian, px)) {
-                    const Vec3f l = light.kind == Light::Kind::Point ? safe_normalize(light.vector - g.position[i])
-                                                                    : light.vector;
-                    const float shade = light.ambient + (1.f - light.ambient) * std::max(0.f, dot(n, l));
-                    const Vec3f c = albedo * shade;
-                    put3(o, {std::clamp(c.x, 0.f, 1.f), std::clamp(c.y, 0.f, 1.f), std::clamp(c.z, 0.f, 1.f)});
-                }
-            }
     });
-    m_scene.throw_if_error("rendering");
+    if (!raster) m_scene.throw_if_error("rendering");
+
+    // Stage 3 (antialiasing): shared by both producers.
+    if (antialias) {
+        AntialiasPlan plan;
+        plan.analyze(camera.width,
+                     camera.height,
+                     aa_triangle.data(),
+                     aa_depth.data(),
+                     clip,
+                     m_mesh.triangles,
+                     m_topology);
+        antialias_frame(plan, frame);
+    }
+}
+
+void Renderer::antialias_frame(const AntialiasPlan& plan, Frame& frame) const {
+    const Vec3f bg = m_settings.background;
+    const float* hard = frame.coverage.data();
+    auto image_of = [&](Pass p) -> Image* {
+        for (std::size_t k = 0; k < frame.passes.size(); ++k)
+            if (frame.passes[k] == p) return &frame.images[k];
+        return nullptr;
+    };
+    if (m_settings.shading == ShadingMode::Training) {
+        // Spec 3.6: AA(x), then out = alpha AA(x) + (1 - alpha) background with the hard alpha.
+        for (Pass p : {Pass::Lambertian,
+                       Pass::Albedo,
+                       Pass::TactileNormal,
+                       Pass::ShadingNormal,
+                       Pass::ShadingNormalViewspace,
+                       Pass::Label}) {
+            Image* image = image_of(p);
+            if (!image) continue;
+            plan.apply(*image);
+            if (p != Pass::Lambertian && p != Pass::Albedo && p != Pass::TactileNormal) continue;
+            const Vec3f back = p == Pass::TactileNormal ? Vec3f{} : bg;
+            for (std::size_t i = 0; i < image->pixel_count(); ++i)
+                if (!(hard[i] > 0.f)) put3(image->data() + 3 * i, back);
+        }
+        return;
+    }
+    // Spec 3.9: alpha = clamp(AA(hard coverage), 0, 1); c alpha + background (1 - alpha), c = 0
+    // off the mesh. The mask pass itself stays hard.
+    Image alpha = frame.coverage;
+    plan.apply(alpha);
+    for (Pass p : {Pass::Lambertian, Pass::Albedo}) {
+        Image* image = image_of(p);
+        if (!image) continue;
+        for (std::size_t i = 0; i < image->pixel_count(); ++i) {
+            const float a = std::clamp(alpha.data()[i], 0.f, 1.f);
+            float* o = image->data() + 3 * i;
+            const bool covered = hard[i] > 0.f;
+            for (int k = 0; k < 3; ++k) o[k] = (covered ? o[k] : 0.f) * a + bg[k] * (1.f - a);
+        }
+    }
 }
 
 Frame Renderer::render_ssaa(const Camera& camera, float ssaa, const Light& light,

@@ -113,6 +113,8 @@ std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
     }
     assets->settings.shading = parse_shading_mode(d.shading);
     assets->settings.background = d.background;
+    assets->settings.visibility = parse_visibility(d.renderer);
+    assets->settings.antialias = d.antialias;
     for (const auto& name : d.passes) {
         try {
             assets->passes.push_back(parse_pass(name));

@@ -171,6 +171,8 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     s.ssaa = finite(root, "ssaa", 1.f);
     if (s.ssaa < 1.f || s.ssaa > 4.f) throw_error("{}: 'ssaa' must be in [1, 4], got {}", path, s.ssaa);
     s.shading = one_of(root, "shading", s.shading, {"training", "visualizer"});
+    s.renderer = one_of(root, "renderer", s.renderer, {"ray", "raster"});
+    s.antialias = root.get<bool>("antialias", s.renderer == "raster");
     s.background = read_vec3(root, "background", s.background);
     s.passes = string_list(root, "passes", s.passes);
     if (s.passes.empty()) throw_error("{}: 'passes' is empty", path);
@@ -218,6 +220,8 @@ Json SceneDescription::to_json() const {
         {"image", {{"width", width}, {"height", height}}},
         {"ssaa", ssaa},
         {"shading", shading},
+        {"renderer", renderer},
+        {"antialias", antialias},
         {"background", vec(background)},
         {"passes", passes},
         {"seed", seed},

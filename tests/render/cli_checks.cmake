@@ -52,3 +52,34 @@ expect(0 "" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001
 expect(0 "" ${TDF} -q render ${_scene} -o ${OUT_DIR}/big image.width=40 image.height=24)
 expect(2 "is 32x24 but" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/big/view_000.exr)
 expect(1 "^tdf compare: .*absent.exr" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/absent.exr)
+
+# compare never passes by mistake: option values are validated (NaN used to pass every pair).
+expect(1 "^tdf compare: --fail must be a finite number" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --fail nan)
+expect(1 "^tdf compare: --failpercent must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --failpercent 101)
+expect(1 "^tdf compare: --hardfail must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --hardfail nan)
+expect(1 "^tdf compare: --erode-mask must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --erode-mask -1)
+expect(1 "^tdf compare: --diff-scale must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --diff-scale 0)
+# JSON of identical images: PSNR null with psnr_infinite, never the string "inf".
+execute_process(COMMAND ${TDF} compare ${OUT_DIR}/turn/view_001.exr ${OUT_DIR}/again/view_001.exr --json
+                RESULT_VARIABLE _rc OUTPUT_VARIABLE _json)
+string(JSON _psnr_type TYPE "${_json}" overall psnr)
+string(JSON _mean_type TYPE "${_json}" overall mean_error)
+string(JSON _infinite GET "${_json}" overall psnr_infinite)
+if(NOT _rc EQUAL 0 OR NOT _psnr_type STREQUAL "NULL" OR NOT _mean_type STREQUAL "NUMBER" OR NOT _infinite)
+  message(FATAL_ERROR "compare --json of identical images: rc ${_rc}, psnr ${_psnr_type}, mean ${_mean_type}\n${_json}")
+endif()
+if(_json MATCHES "\"inf\"")
+  message(FATAL_ERROR "compare --json printed the string \"inf\":\n${_json}")
+endif()
+
+# Folders: pairs by relative path; missing / extra files fail unless allowed; --renderer raster.
+expect(0 "" ${TDF} -q render ${_scene} -o ${OUT_DIR}/raster --turntable 3 image.width=32 image.height=24 --renderer raster)
+expect(1 "^tdf render: .*renderer" ${TDF} render ${_scene} -o ${OUT_DIR}/bad renderer=gpu)
+expect(0 "" ${TDF} compare ${OUT_DIR}/turn ${OUT_DIR}/again --allow-extra --allow-missing)
+expect(1 "" ${TDF} compare ${OUT_DIR}/turn ${OUT_DIR}/again)
+expect(0 "" ${TDF} compare ${OUT_DIR}/turn ${OUT_DIR}/raster --allow-missing --erode-mask 1 --fail 0.004 --failpercent 0.5 --hardfail 0.2)
+expect(1 "" ${TDF} compare ${OUT_DIR}/turn ${OUT_DIR}/raster --allow-missing --diff ${OUT_DIR}/raster_diffs)
+if(NOT EXISTS ${OUT_DIR}/raster_diffs/view_000.diff.exr)
+  message(FATAL_ERROR "tdf compare --diff on folders did not write raster_diffs/view_000.diff.exr")
+endif()
+expect(1 "must both be folders" ${TDF} compare ${OUT_DIR}/turn ${OUT_DIR}/turn/view_000.exr)

@@ -1,7 +1,10 @@
 #pragma once
-/// Per-pixel surface data of one traced view, structure of arrays (one vector per attribute,
+/// Per-pixel surface data of one view, structure of arrays (one vector per attribute,
 /// index = y * width + x, row 0 = top). Background pixels have mask 0, triangle -1 and every
 /// other attribute zero (as the rasterizer's interpolation gives, spec 3.1).
+///
+/// The one interface between visibility and shading: the ray tracer (trace.h) and the
+/// rasterizer (raster.h) both produce it, and the renderer shades it with one code path.
 #include <tdf/core/vec.h>
 
 #include <cstddef>
@@ -12,17 +15,17 @@ namespace tdf {
 struct GBuffer {
     int width = 0;
     int height = 0;
-    std::vector<float> mask;             ///< 1 hit, 0 background
-    std::vector<int> triangle;           ///< index into TriangleMesh::triangles, -1 background
-    std::vector<Vec2f> barycentric;      ///< (b1, b2): p = (1-b1-b2) p0 + b1 p1 + b2 p2
-    std::vector<Vec3f> position;         ///< world-space hit point
-    std::vector<float> depth;            ///< -z_cam (distance along -back from the camera plane)
-    std::vector<Vec3f> normal;           ///< normalize(interpolated vertex normals) N
-    std::vector<Vec3f> tangent;          ///< normalize(interpolated corner tangents) T
-    std::vector<float> handedness;       ///< w of the tangent frame, +1 or -1
-    std::vector<Vec2f> uv;               ///< interpolated UV, OBJ convention (v up); 0 without UVs
-    std::vector<Vec2f> duv_dx;           ///< d uv / d pixel x (ray differentials)
-    std::vector<Vec2f> duv_dy;           ///< d uv / d pixel y (pixel y grows down the image)
+    std::vector<float> mask;         ///< 1 hit, 0 background
+    std::vector<int> triangle;       ///< index into TriangleMesh::triangles, -1 background
+    std::vector<Vec2f> barycentric;  ///< (b1, b2): p = (1-b1-b2) p0 + b1 p1 + b2 p2
+    std::vector<Vec3f> position;     ///< world-space hit point
+    std::vector<float> depth;        ///< -z_cam (distance along -back from the camera plane)
+    std::vector<Vec3f> normal;       ///< normalize(interpolated vertex normals) N
+    std::vector<Vec3f> tangent;      ///< normalize(interpolated corner tangents) T
+    std::vector<float> handedness;   ///< w of the tangent frame, +1 or -1
+    std::vector<Vec2f> uv;           ///< interpolated UV, OBJ convention (v up); 0 without UVs
+    std::vector<Vec2f> duv_dx;  ///< d uv / d pixel x (ray differentials, or dr.interpolate's analytic ones)
+    std::vector<Vec2f> duv_dy;  ///< d uv / d pixel y (pixel y grows down the image)
 
     /// Sizes every attribute for width x height pixels (contents unspecified).
     void resize(int new_width, int new_height);

@@ -1,12 +1,15 @@
 #pragma once
-/// Renders the passes of one view of a textured mesh (what `tdf render` draws): traces each
-/// tile into a GBuffer and shades it right away (spec 3.1-3.5 for training shading, 3.9 for
-/// the visualizer's). SSAA renders at the internal size and resizes every pass back (3.8).
-///
-/// Not reproduced: nvdiffrast's analytic silhouette antialiasing (spec 3.6). Without SSAA the
-/// coverage is hard (1 sample per pixel); compare silhouettes with an eroded mask.
+/// Renders the passes of one view of a textured mesh (what `tdf render` draws) in three stages:
+///   1. visibility: a producer fills G-buffer tiles (gbuffer.h): Embree rays (trace.h) or the
+///      nvdiffrast-rules rasterizer (raster.h: rasterize once, interpolate per tile);
+///   2. shading: one code path turns every G-buffer tile into the passes, whichever producer
+///      made it (spec 3.1-3.5 for training shading, 3.9 for the visualizer's);
+///   3. antialiasing (optional, either producer): dr.antialias (antialias.h) on the passes the
+///      reference antialiases (spec 3.6 training, 3.9 visualizer), then SSAA resizing (3.8).
+/// Tiles are shaded right after they are produced, from a small cache-resident buffer.
 #include <tdf/core/vec.h>
 #include <tdf/mesh/triangle_mesh.h>
+#include <tdf/render/antialias.h>
 #include <tdf/render/frame.h>
 #include <tdf/render/texture.h>
 #include <tdf/scene/camera.h>
@@ -57,30 +60,56 @@ const char* shading_mode_name(ShadingMode mode);
 /// "training" or "visualizer"; throws tdf::Error otherwise.
 ShadingMode parse_shading_mode(const std::string& name);
 
+/// Which producer computes visibility (stage 1).
+enum class Visibility {
+    Ray,     ///< Embree primary rays; UV derivatives from ray differentials
+    Raster,  ///< the rasterizer with nvdiffrast's rules; UV derivatives as dr.interpolate
+};
+const char* visibility_name(Visibility visibility);
+/// "ray" or "raster"; throws tdf::Error otherwise.
+Visibility parse_visibility(const std::string& name);
+
 struct RenderSettings {
     ShadingMode shading = ShadingMode::Training;
     Vec3f background{1, 1, 1};  ///< composited behind albedo and lambertian (spec 3.6: white)
+    Visibility visibility = Visibility::Ray;
+    /// dr.antialias on the shaded passes, as the reference applies it: training shading
+    /// antialiases lambertian, albedo, tactile_normal, shading_normal, shading_normal_viewspace
+    /// and label, then re-composites albedo, lambertian and tactile_normal with the hard coverage
+    /// (spec 3.6); visualizer shading antialiases only the coverage and blends albedo and
+    /// lambertian over the background with it, c alpha + background (1 - alpha) with c = 0 off
+    /// the mesh (spec 3.9). mask, depth, normal, tangent and uv stay hard in both.
+    bool antialias = false;
 };
 
 class Renderer {
 public:
-    /// `scene` must have been built from `mesh`; both are borrowed.
+    /// `scene` must have been built from `mesh`; both are borrowed (the raster producer does not
+    /// trace, but the scene keeps one constructor for both).
     Renderer(const TriangleMesh& mesh, const EmbreeScene& scene, const SurfaceMaterial& material,
              const RenderSettings& settings = {});
 
     /// Renders `passes` at camera.width x camera.height, one sample per pixel.
     Frame render(const Camera& camera, const Light& light, const std::vector<Pass>& passes) const;
     /// The same into `frame`, reusing its images when passes and size match (no allocation).
-    void render(const Camera& camera, const Light& light, const std::vector<Pass>& passes, Frame& frame) const;
+    void render(const Camera& camera, const Light& light, const std::vector<Pass>& passes,
+                Frame& frame) const;
     /// Renders at the SSAA internal size (ceil(size * ssaa / 8) * 8 per side when ssaa != 1,
     /// spec 2.3) and resizes every pass back to camera.width x camera.height (spec 3.8).
-    Frame render_ssaa(const Camera& camera, float ssaa, const Light& light, const std::vector<Pass>& passes) const;
+    Frame render_ssaa(const Camera& camera, float ssaa, const Light& light,
+                      const std::vector<Pass>& passes) const;
+
+    const RenderSettings& settings() const { return m_settings; }
 
 private:
+    // Stage 3: dr.antialias on the passes the shading mode antialiases (see RenderSettings).
+    void antialias_frame(const AntialiasPlan& plan, Frame& frame) const;
+
     const TriangleMesh& m_mesh;
     const EmbreeScene& m_scene;
     SurfaceMaterial m_material;
     RenderSettings m_settings;
+    EdgeTopology m_topology;  ///< built when antialias is on
 };
 
 }  // namespace tdf

@@ -71,6 +71,8 @@ struct SceneDescription {
     int height = 512;
     float ssaa = 1.f;
     std::string shading = "visualizer";  ///< training | visualizer (checked by the renderer)
+    std::string renderer = "ray";        ///< ray | raster: the visibility producer
+    bool antialias = false;              ///< dr.antialias; default true for raster, false for ray
     Vec3f background{1, 1, 1};
     std::vector<std::string> passes = {"lambertian", "albedo", "mask"};  ///< checked by the renderer
     std::uint64_t seed = 0;
