@@ -7,6 +7,7 @@
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
 #include <tdf/render/image_compare.h>
+#include <tdf/report/compare_report.h>
 
 #include <cmath>
 #include <cstdio>
@@ -20,6 +21,7 @@ struct CompareCliOptions {
     CompareOptions compare;
     std::string diff;
     float diff_scale = 16.f;
+    std::string html;
     bool json = false;
 };
 
@@ -62,6 +64,10 @@ int run_compare(const CompareCliOptions& o) {
     }
     const CompareResult r = compare_layers(a, b, o.compare, o.a, o.b);
     if (!o.diff.empty()) write_exr(o.diff, difference_layers(a, b, o.diff_scale));
+    if (!o.html.empty())
+        write_compare_report(o.html, {"tdf compare", o.compare,
+                                      {compare_file_entry(o.b, o.a, o.b, a, b, r, o.compare,
+                                                          report_files_folder(o.html), "file")}});
     if (o.json) {
         Json channels = Json::array();
         for (const auto& s : r.channels) channels.push_back(stats_json(s));
@@ -117,6 +123,8 @@ Command register_compare(CLI::App& root) {
         ->capture_default_str();
     app->add_option("--diff", o->diff, "write |a - b| * --diff-scale to this EXR");
     app->add_option("--diff-scale", o->diff_scale, "scale of the difference image")->capture_default_str();
+    app->add_option("--html", o->html,
+                    "write an HTML page with A, B and a difference heatmap per pass (images in <page>_files/)");
     app->add_flag("--json", o->json, "print the report as JSON on stdout")->capture_default_str();
     command.app = app;
     command.run = [o] { return run_compare(*o); };
