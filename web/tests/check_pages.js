@@ -95,6 +95,7 @@ async function checkViewer(page, handle, index, pagePath, o, shotBase) {
   }
   check(modelPixels > 0.01 * shot.width * shot.height, `${name} shows the model`,
         `${modelPixels} of ${shot.width * shot.height} pixels differ from the background`);
+  await checkInteraction(page, handle, canvas, name, background, modelPixels);
   if (!o.tdf) return;
   const glb = await handle.evaluate((el) => {
     const a = el.querySelector('a[href$=".glb"]');
@@ -110,6 +111,43 @@ async function checkViewer(page, handle, index, pagePath, o, shotBase) {
   }
   const iou = union ? inter / union : 0;
   check(iou >= o.minIou, `${name} silhouette matches tdf render`, `IoU ${iou.toFixed(4)} (min ${o.minIou})`);
+}
+
+// The controls a person uses: the wheel zooms (the model covers more pixels), the light sliders
+// change the shading. Restores the start view afterwards (reset button).
+async function checkInteraction(page, handle, canvas, name, background, modelPixelsBefore) {
+  const grab = async () => PNG.sync.read(Buffer.from(await canvas.screenshot()));
+  const countModel = (png) => {
+    let n = 0;
+    for (let i = 0; i < png.width * png.height; ++i) {
+      const d = Math.max(Math.abs(png.data[4 * i] - background[0]), Math.abs(png.data[4 * i + 1] - background[1]),
+                         Math.abs(png.data[4 * i + 2] - background[2]));
+      if (d > 12) ++n;
+    }
+    return n;
+  };
+  const box = await canvas.boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.wheel({deltaY: -400});
+  await page.evaluate(() => new Promise((resolve) => requestAnimationFrame(() => resolve())));
+  const zoomed = countModel(await grab());
+  check(zoomed > modelPixelsBefore, `${name} wheel zooms in`, `${modelPixelsBefore} -> ${zoomed} model pixels`);
+  const before = await grab();
+  await handle.evaluate((el) => {
+    const slider = el.querySelector('[data-control=light-azimuth]');
+    slider.value = String(-Number(slider.value) - 60);
+    slider.dispatchEvent(new Event('input'));
+  });
+  const after = await grab();
+  let changed = 0;
+  for (let i = 0; i < before.data.length; i += 4) if (Math.abs(before.data[i] - after.data[i]) > 8) ++changed;
+  check(changed > 0.01 * before.width * before.height, `${name} light slider moves the light`, `${changed} pixels changed`);
+  await handle.evaluate((el) => {
+    const slider = el.querySelector('[data-control=light-azimuth]');
+    slider.value = '35';
+    slider.dispatchEvent(new Event('input'));
+    el.querySelector('[data-control=reset]').click();
+  });
 }
 
 async function checkSortable(page, pageName) {
