@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 namespace tdf::app {
 
@@ -66,7 +67,9 @@ int run_compare(const CompareCliOptions& o) {
     if (!o.diff.empty()) write_exr(o.diff, difference_layers(a, b, o.diff_scale));
     if (!o.html.empty())
         write_compare_report(o.html, {"tdf compare", o.compare,
-                                      {compare_file_entry(o.b, o.a, o.b, a, b, r, o.compare,
+                                      {compare_file_entry(std::filesystem::path(o.a).filename().string() + " vs " +
+                                                              std::filesystem::path(o.b).filename().string(),
+                                                          o.a, o.b, a, b, r, o.compare,
                                                           report_files_folder(o.html), "file")}});
     if (o.json) {
         Json channels = Json::array();

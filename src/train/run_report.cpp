@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <filesystem>
 #include <sstream>
 
@@ -102,6 +103,7 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
 
 void write_optimize_report(const std::string& folder, const std::string& name, const std::string& scene_path,
                            const SceneAssets& assets, const RunConfig& config) {
+    const auto start = std::chrono::steady_clock::now();
     const int views = config.turntable_views, resolution = config.turntable_resolution;
     if (views > 0) {
         write_turntable(folder, "turntable_input", assets.mesh, *assets.scene, assets.material, views, resolution);
@@ -117,7 +119,8 @@ void write_optimize_report(const std::string& folder, const std::string& name, c
     }
     const std::string page = folder + "/" + name + "_report.html";
     write_run_report(page, collect_run_report(folder, name, scene_path, assets.mesh, config));
-    log_info("report: {}", page);
+    log_info("report: {} ({:.1f} s)", page,
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
 }  // namespace tdf
