@@ -16,6 +16,7 @@ namespace fs = std::filesystem;
 
 // Generated at configure time from src/report/assets/ (see src/CMakeLists.txt).
 extern const char* const kEmbeddedViewerJs;
+extern const char* const kEmbeddedPlotJs;
 
 namespace {
 
@@ -55,6 +56,10 @@ details summary { cursor: pointer; font-weight: 600; }
 .tdf-viewer .controls { display: grid; grid-template-columns: auto 180px; gap: 6px 10px; align-items: center; }
 .tdf-viewer-status { color: var(--muted); grid-column: 1 / span 2; max-width: 320px; }
 .tdf-viewer[data-state=error] .tdf-viewer-status, .tdf-viewer[data-state=unavailable] .tdf-viewer-status { color: var(--fail); }
+.tdf-plot canvas { width: 900px; max-width: 100%; height: auto; border: 1px solid var(--line); background: #fff; }
+.tdf-plot-legend { display: flex; flex-wrap: wrap; gap: 4px 14px; margin: 6px 0; font-size: 13px; }
+.tdf-plot-legend .swatch { display: inline-block; width: 18px; height: 3px; vertical-align: middle; margin: 0 4px; }
+.tdf-plot-readout { color: var(--muted); font-size: 12px; min-height: 1.4em; font-variant-numeric: tabular-nums; }
 .loss-plot svg { max-width: 100%; height: auto; background: #fff; border: 1px solid var(--line); }
 table.sortable th { cursor: pointer; user-select: none; white-space: nowrap; }
 table.sortable th[data-sort=asc]::after { content: " \25B2"; }
@@ -184,6 +189,7 @@ bool install_report_assets(const std::string& page_folder) {
     const fs::path assets = fs::path(page_folder.empty() ? "." : page_folder) / kReportAssetsFolder;
     ensure_folder(assets.string());
     write_text_atomically((assets / "tdf_viewer.js").string(), kEmbeddedViewerJs);
+    write_text_atomically((assets / "tdf_plot.js").string(), kEmbeddedPlotJs);
     const fs::path three = fs::path(web_modules_folder()) / "three";
     const std::pair<const char*, const char*> files[] = {{"build/three.min.js", "three.min.js"},
                                                          {"examples/js/loaders/GLTFLoader.js", "GLTFLoader.js"},

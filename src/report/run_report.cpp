@@ -202,7 +202,22 @@ void write_run_report(const std::string& html_path, const RunReport& r) {
     body += "</div>\n";
 
     body += "<h2 id=\"losses\">Loss curves</h2>\n";
-    if (!r.loss_plot_svg.empty()) body += inline_svg(r.loss_plot_svg);
+    if (r.losses.is_array() && !r.losses.empty()) {
+        body += fmt::format("<script type=\"application/json\" id=\"losses-data\">{}</script>\n"
+                            "<div class=\"tdf-plot\" data-source=\"losses-data\" data-boundary=\"{}\">"
+                            "<canvas width=\"900\" height=\"360\"></canvas><div class=\"tdf-plot-legend\"></div>"
+                            "<div class=\"tdf-plot-readout\"></div></div>\n",
+                            json_for_html(r.losses), r.init_iterations);
+        if (!r.loss_plot_svg.empty())
+            body += "<noscript>" + inline_svg(r.loss_plot_svg) + "</noscript>\n";
+    } else if (!r.loss_plot_svg.empty()) {
+        body += inline_svg(r.loss_plot_svg);
+    }
+    if (!r.loss_plot_svg.empty())
+        body += fmt::format("<p class=\"meaning\">weighted terms, log scale; the same plot as a file: <a href=\"{}\">{}</a>"
+                            "</p>\n",
+                            html_escape(relative_url(r.loss_plot_svg, folder)),
+                            html_escape(fs::path(r.loss_plot_svg).filename().string()));
     body += loss_table(r);
 
     body += "<h2 id=\"timings\">Timings</h2>\n" + timings_section(r.timings);
@@ -217,7 +232,9 @@ void write_run_report(const std::string& html_path, const RunReport& r) {
                                 html_escape(fs::path(l.path).filename().string()), html_escape(l.caption));
         body += "</ul>\n";
     }
-    body += html_page_end(model_scripts.empty() ? "" : viewer_scripts_html(model_scripts, three));
+    body += html_page_end(viewer_scripts_html(model_scripts, three && !model_scripts.empty()) +
+                          "<script src=\"" + std::string(kReportAssetsFolder) + "/tdf_plot.js\"></script>\n"
+                          "<script>window.tdfStartPlots();</script>\n");
     write_text_atomically(html_path, body);
 }
 

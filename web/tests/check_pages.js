@@ -2,7 +2,7 @@
 // Opens tdf's HTML reports in headless Chromium from file:// and checks what a person would see:
 //   - no console error, no uncaught exception, no failed request;
 //   - every <img> loaded (complete, naturalWidth > 0);
-//   - every sortable table sorts its numeric columns on a click;
+//   - every sortable table sorts its numeric columns on a click; every loss plot is drawn;
 //   - every 3D view reaches data-state="ready", and a screenshot of its canvas has model pixels
 //     where tdf's own renderer sees the model from the same camera (`tdf render`, mask pass):
 //     intersection over union of the two silhouettes >= --min-iou.
@@ -150,6 +150,24 @@ async function checkInteraction(page, handle, canvas, name, background, modelPix
   });
 }
 
+// Loss plots: drawn (data-state ready) with coloured curve pixels on the white canvas.
+async function checkPlots(page, pageName, shotBase) {
+  const plots = await page.$$('.tdf-plot');
+  for (let p = 0; p < plots.length; ++p) {
+    const state = await plots[p].evaluate((el) => el.getAttribute('data-state'));
+    const canvas = await plots[p].$('canvas');
+    const shotPath = `${shotBase}_plot${p}.png`;
+    await canvas.screenshot({path: shotPath});
+    const png = PNG.sync.read(fs.readFileSync(shotPath));
+    let coloured = 0;
+    for (let i = 0; i < png.width * png.height; ++i) {
+      const r = png.data[4 * i], g = png.data[4 * i + 1], b = png.data[4 * i + 2];
+      if (Math.max(r, g, b) - Math.min(r, g, b) > 60) ++coloured;
+    }
+    check(state === 'ready' && coloured > 200, `${pageName} loss plot ${p} is drawn`, `state ${state}, ${coloured} curve pixels`);
+  }
+}
+
 async function checkSortable(page, pageName) {
   const tables = await page.$$('table.sortable');
   for (let t = 0; t < tables.length; ++t) {
@@ -208,6 +226,7 @@ async function main() {
       const viewers = await page.$$('.tdf-viewer');
       for (let v = 0; v < viewers.length; ++v) await checkViewer(page, viewers[v], v, pagePath, o, shotBase);
       await checkSortable(page, name);
+      await checkPlots(page, name, shotBase);
       await page.screenshot({path: `${shotBase}_page.png`, fullPage: true});
       check(problems.length === 0, `${name} has no console errors`, problems.slice(0, 5).join(' | '));
       await page.close();
