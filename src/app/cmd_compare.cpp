@@ -9,6 +9,8 @@
 #include <tdf/render/image_compare.h>
 #include <tdf/report/compare_report.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -61,6 +63,11 @@ int run_compare(const CompareCliOptions& o) {
                                     .c_str());
         std::fprintf(stderr, "tdf compare: %s is %dx%d but %s is %dx%d\n", o.a.c_str(), ia.width(), ia.height(),
                      o.b.c_str(), ib.width(), ib.height());
+        if (!o.html.empty())
+            write_compare_report(o.html, {"tdf compare", o.compare,
+                                          {compare_file_problem(o.a + " vs " + o.b, o.a, o.b, "size_mismatch",
+                                                                fmt::format("A is {}x{} but B is {}x{}", ia.width(),
+                                                                            ia.height(), ib.width(), ib.height()))}});
         return kExitSizeMismatch;
     }
     const CompareResult r = compare_layers(a, b, o.compare, o.a, o.b);

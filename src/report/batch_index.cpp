@@ -1,10 +1,8 @@
-#include <tdf/report/batch_index.h>
-
+#include <fmt/format.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
+#include <tdf/report/batch_index.h>
 #include <tdf/report/html.h>
-
-#include <fmt/format.h>
 
 #include <cmath>
 #include <filesystem>
@@ -56,7 +54,8 @@ constexpr const char* kSortScript = R"js(<script>
 
 std::string numeric_cell(double value, bool known) {
     if (!known || !std::isfinite(value)) return "<td class=\"num\" data-value=\"\">-</td>";
-    return fmt::format("<td class=\"num\" data-value=\"{}\">{}</td>", value, html_escape(format_number(value)));
+    return fmt::format(
+        "<td class=\"num\" data-value=\"{}\">{}</td>", value, html_escape(format_number(value)));
 }
 
 bool is_failure(const std::string& status) {
@@ -65,7 +64,8 @@ bool is_failure(const std::string& status) {
 
 }  // namespace
 
-void write_batch_index(const std::string& html_path, const std::string& title, const std::vector<BatchRow>& rows) {
+void write_batch_index(const std::string& html_path, const std::string& title,
+                       const std::vector<BatchRow>& rows) {
     const std::string folder = fs::path(html_path).parent_path().string();
     std::vector<std::string> measures;
     std::set<std::string> seen;
@@ -76,11 +76,17 @@ void write_batch_index(const std::string& html_path, const std::string& title, c
     for (const BatchRow& row : rows) failures += is_failure(row.status) ? 1 : 0;
 
     std::string html = html_page_begin(title);
-    html += fmt::format("<h1>{}</h1>\n<p class=\"subtitle\">{} jobs, <span class=\"{}\">{} failed</span> &middot; "
-                        "click a column to sort</p>\n",
-                        html_escape(title), rows.size(), failures ? "fail" : "pass", failures);
-    html += "<table class=\"sortable\">\n<thead><tr><th data-type=\"text\">job</th><th data-type=\"text\">preview</th>"
-            "<th data-type=\"text\">status</th><th data-type=\"number\" class=\"num\">wall time (s)</th>";
+    html += fmt::format(
+        "<h1>{}</h1>\n<p class=\"subtitle\">{} jobs, <span class=\"{}\">{} failed</span> &middot; "
+        "click a column to sort</p>\n",
+        html_escape(title),
+        rows.size(),
+        failures ? "fail" : "pass",
+        failures);
+    html +=
+        "<table class=\"sortable\">\n<thead><tr><th data-type=\"text\">job</th><th "
+        "data-type=\"text\">preview</th>"
+        "<th data-type=\"text\">status</th><th data-type=\"number\" class=\"num\">wall time (s)</th>";
     for (const std::string& m : measures)
         html += fmt::format("<th data-type=\"number\" class=\"num\">{}</th>", html_escape(m));
     html += "<th data-type=\"text\">error</th></tr></thead>\n<tbody>\n";
@@ -97,11 +103,14 @@ void write_batch_index(const std::string& html_path, const std::string& title, c
             if (!fs::is_regular_file(row.thumbnail, ec))
                 throw_error("batch index: thumbnail '{}' of job '{}' does not exist", row.thumbnail, row.job);
             const std::string img = fmt::format("<img class=\"thumb\" src=\"{}\" alt=\"{} preview\">",
-                                                html_escape(relative_url(row.thumbnail, folder)), html_escape(row.job));
-            html += fmt::format("<td data-value=\"{}\">{}</td>", html_escape(row.job),
+                                                html_escape(relative_url(row.thumbnail, folder)),
+                                                html_escape(row.job));
+            html += fmt::format("<td data-value=\"{}\">{}</td>",
+                                html_escape(row.job),
                                 has_page ? fmt::format("<a href=\"{}\">{}</a>", href, img) : img);
         }
-        html += fmt::format("<td class=\"{}\">{}</td>", is_failure(row.status) ? "fail" : "pass", html_escape(row.status));
+        html += fmt::format(
+            "<td class=\"{}\">{}</td>", is_failure(row.status) ? "fail" : "pass", html_escape(row.status));
         html += numeric_cell(row.wall_seconds, row.wall_seconds >= 0);
         for (const std::string& m : measures) {
             double value = 0;

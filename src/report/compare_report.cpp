@@ -1,12 +1,10 @@
-#include <tdf/report/compare_report.h>
-
+#include <fmt/format.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/render/frame.h>
 #include <tdf/render/pass.h>
+#include <tdf/report/compare_report.h>
 #include <tdf/report/html.h>
-
-#include <fmt/format.h>
 
 #include <algorithm>
 #include <array>
@@ -54,8 +52,10 @@ Image layer_preview(const ExrLayer& layer, const Image* mask) {
             for (int c = 0; c < 3; ++c) {
                 float v = src.at(x, y, colour_channels == 1 ? 0 : std::min(c, colour_channels - 1));
                 if (colour_channels == 2 && c == 2) v = 0;
-                if (signed_values) v = v * 0.5f + 0.5f;
-                else if (beyond) v = hi > lo ? (v - lo) / (hi - lo) : 0.0f;
+                if (signed_values)
+                    v = v * 0.5f + 0.5f;
+                else if (beyond)
+                    v = hi > lo ? (v - lo) / (hi - lo) : 0.0f;
                 out.at(x, y, c) = std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f);
             }
     return out;
@@ -63,28 +63,40 @@ Image layer_preview(const ExrLayer& layer, const Image* mask) {
 
 // Inferno-like ramp (matplotlib's inferno at 6 stops): perceptually ordered, black = no difference.
 std::array<float, 3> heat_colour(float t) {
-    static const float kStops[6][3] = {{0.000f, 0.000f, 0.016f}, {0.259f, 0.039f, 0.408f}, {0.576f, 0.149f, 0.404f},
-                                       {0.867f, 0.318f, 0.227f}, {0.988f, 0.647f, 0.039f}, {0.988f, 1.000f, 0.643f}};
+    static const float kStops[6][3] = {{0.000f, 0.000f, 0.016f},
+                                       {0.259f, 0.039f, 0.408f},
+                                       {0.576f, 0.149f, 0.404f},
+                                       {0.867f, 0.318f, 0.227f},
+                                       {0.988f, 0.647f, 0.039f},
+                                       {0.988f, 1.000f, 0.643f}};
     t = std::clamp(std::isfinite(t) ? t : 1.0f, 0.0f, 1.0f) * 5.0f;
     const int i = std::min(int(t), 4);
     const float f = t - float(i);
-    return {kStops[i][0] + f * (kStops[i + 1][0] - kStops[i][0]), kStops[i][1] + f * (kStops[i + 1][1] - kStops[i][1]),
+    return {kStops[i][0] + f * (kStops[i + 1][0] - kStops[i][0]),
+            kStops[i][1] + f * (kStops[i + 1][1] - kStops[i][1]),
             kStops[i][2] + f * (kStops[i + 1][2] - kStops[i][2])};
 }
 
 std::string sanitize(const std::string& text) {
     std::string out;
-    for (const char c : text) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
+    for (const char c : text)
+        out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
     return out.empty() ? "image" : out;
 }
 
 std::string stats_rows(const std::vector<ChannelStats>& channels) {
     std::string html;
     for (const ChannelStats& s : channels)
-        html += fmt::format("<tr><td><code>{}</code></td><td class=\"num\">{}</td><td class=\"num\">{}</td>"
-                            "<td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">({}, {})</td></tr>\n",
-                            html_escape(s.name), format_number(s.mean_error), format_number(s.rms_error),
-                            format_number(s.psnr), format_number(s.max_error), s.max_x, s.max_y);
+        html += fmt::format(
+            "<tr><td><code>{}</code></td><td class=\"num\">{}</td><td class=\"num\">{}</td>"
+            "<td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">({}, {})</td></tr>\n",
+            html_escape(s.name),
+            format_number(s.mean_error),
+            format_number(s.rms_error),
+            format_number(s.psnr),
+            format_number(s.max_error),
+            s.max_x,
+            s.max_y);
     return html;
 }
 
@@ -123,7 +135,8 @@ CompareFile compare_file_entry(const std::string& label, const std::string& a_pa
         // The verdict rule of the whole file applied to this pass; the mask rides along so that
         // --erode-mask excludes the same silhouette pixels.
         std::vector<ExrLayer> sa{la}, sb{*lb};
-        if (options.erode_mask > 0 && la.name != "mask" && a_mask && b_mask) sa.push_back(*a_mask), sb.push_back(*b_mask);
+        if (options.erode_mask > 0 && la.name != "mask" && a_mask && b_mask)
+            sa.push_back(*a_mask), sb.push_back(*b_mask);
         const CompareResult r = compare_layers(sa, sb, options, a_path, b_path);
         pass.passed = r.passed;
         pass.failed_pixels = r.failed_pixels;
@@ -165,8 +178,21 @@ CompareFile compare_file_entry(const std::string& label, const std::string& a_pa
         write_png(pass.heatmap, heat);
         file.passes.push_back(std::move(pass));
     }
-    std::stable_sort(file.passes.begin(), file.passes.end(),
-                     [](const ComparePass& x, const ComparePass& y) { return !x.passed && y.passed; });
+    std::stable_sort(file.passes.begin(), file.passes.end(), [](const ComparePass& x, const ComparePass& y) {
+        return !x.passed && y.passed;
+    });
+    return file;
+}
+
+CompareFile compare_file_problem(const std::string& label, const std::string& a_path,
+                                 const std::string& b_path, const std::string& result,
+                                 const std::string& message) {
+    CompareFile file;
+    file.label = label;
+    file.a_path = a_path;
+    file.b_path = b_path;
+    file.result = result;
+    file.message = message;
     return file;
 }
 
@@ -184,54 +210,87 @@ void write_compare_report(const std::string& html_path, const CompareReport& rep
     const CompareOptions& t = report.thresholds;
 
     std::string html = html_page_begin(report.title);
-    html += fmt::format("<h1>{}</h1>\n<p class=\"subtitle\">{} file{} compared, <span class=\"{}\">{} failed</span>"
-                        " &middot; a pixel fails when a channel differs by more than {}; a file fails when more than "
-                        "{} % of its pixels fail or any difference exceeds {}{}</p>\n",
-                        html_escape(report.title), files.size(), files.size() == 1 ? "" : "s", failed ? "fail" : "pass",
-                        failed, format_number(t.fail), format_number(t.failpercent), format_number(t.hardfail),
-                        t.erode_mask > 0 ? fmt::format("; pixels within {} of a silhouette are ignored", t.erode_mask)
-                                         : std::string());
-    html += "<table>\n<tr><th>file</th><th>result</th><th class=\"num\">failed pixels</th><th class=\"num\">PSNR</th>"
-            "<th class=\"num\">max error</th></tr>\n";
+    html += fmt::format(
+        "<h1>{}</h1>\n<p class=\"subtitle\">{} file{} compared, <span class=\"{}\">{} failed</span>"
+        " &middot; a pixel fails when a channel differs by more than {}; a file fails when more than "
+        "{} % of its pixels fail or any difference exceeds {}{}</p>\n",
+        html_escape(report.title),
+        files.size(),
+        files.size() == 1 ? "" : "s",
+        failed ? "fail" : "pass",
+        failed,
+        format_number(t.fail),
+        format_number(t.failpercent),
+        format_number(t.hardfail),
+        t.erode_mask > 0 ? fmt::format("; pixels within {} of a silhouette are ignored", t.erode_mask)
+                         : std::string());
+    html +=
+        "<table>\n<tr><th>file</th><th>result</th><th class=\"num\">failed pixels</th><th "
+        "class=\"num\">PSNR</th>"
+        "<th class=\"num\">max error</th></tr>\n";
     for (std::size_t i = 0; i < files.size(); ++i) {
         const CompareFile& f = *files[i];
-        html += fmt::format("<tr><td><a href=\"#file-{}\">{}</a></td><td class=\"{}\">{}</td><td class=\"num\">{}</td>"
-                            "<td class=\"num\">{}</td><td class=\"num\">{}</td></tr>\n",
-                            i, html_escape(f.label), is_failure(f.result) ? "fail" : "pass", html_escape(f.result),
-                            f.passes.empty() ? "-" : fmt::format("{} ({} %)", f.failed_pixels, format_number(f.fail_percent)),
-                            f.passes.empty() ? "-" : format_number(f.overall.psnr),
-                            f.passes.empty() ? "-" : format_number(f.overall.max_error));
+        html += fmt::format(
+            "<tr><td><a href=\"#file-{}\">{}</a></td><td class=\"{}\">{}</td><td class=\"num\">{}</td>"
+            "<td class=\"num\">{}</td><td class=\"num\">{}</td></tr>\n",
+            i,
+            html_escape(f.label),
+            is_failure(f.result) ? "fail" : "pass",
+            html_escape(f.result),
+            f.passes.empty() ? "-" : fmt::format("{} ({} %)", f.failed_pixels, format_number(f.fail_percent)),
+            f.passes.empty() ? "-" : format_number(f.overall.psnr),
+            f.passes.empty() ? "-" : format_number(f.overall.max_error));
     }
     html += "</table>\n";
 
     for (std::size_t i = 0; i < files.size(); ++i) {
         const CompareFile& f = *files[i];
-        html += fmt::format("<h2 id=\"file-{}\">{} <span class=\"{}\">{}</span></h2>\n", i, html_escape(f.label),
-                            is_failure(f.result) ? "fail" : "pass", html_escape(f.result));
-        html += fmt::format("<p class=\"subtitle\">A: <code>{}</code><br>B: <code>{}</code>{}</p>\n", html_escape(f.a_path),
+        html += fmt::format("<h2 id=\"file-{}\">{} <span class=\"{}\">{}</span></h2>\n",
+                            i,
+                            html_escape(f.label),
+                            is_failure(f.result) ? "fail" : "pass",
+                            html_escape(f.result));
+        html += fmt::format("<p class=\"subtitle\">A: <code>{}</code><br>B: <code>{}</code>{}</p>\n",
+                            html_escape(f.a_path),
                             html_escape(f.b_path),
-                            f.width > 0 ? fmt::format("<br>{} x {} pixels, {} compared, {} failed ({} %)", f.width,
-                                                      f.height, f.compared_pixels, f.failed_pixels,
+                            f.width > 0 ? fmt::format("<br>{} x {} pixels, {} compared, {} failed ({} %)",
+                                                      f.width,
+                                                      f.height,
+                                                      f.compared_pixels,
+                                                      f.failed_pixels,
                                                       format_number(f.fail_percent))
                                         : std::string());
-        if (!f.message.empty()) html += fmt::format("<p class=\"error-line\">{}</p>\n", html_escape(f.message));
+        if (!f.message.empty())
+            html += fmt::format("<p class=\"error-line\">{}</p>\n", html_escape(f.message));
         for (const ComparePass& p : f.passes) {
-            html += fmt::format("<div class=\"card\"><h3>{} <span class=\"{}\">{}</span> <span class=\"meaning\" "
-                                "style=\"font-weight:400\">{} pixels failed ({} %)</span></h3>\n",
-                                html_escape(p.name), p.passed ? "pass" : "fail", p.passed ? "pass" : "fail",
-                                p.failed_pixels, format_number(p.fail_percent));
+            html += fmt::format(
+                "<div class=\"card\"><h3>{} <span class=\"{}\">{}</span> <span class=\"meaning\" "
+                "style=\"font-weight:400\">{} pixels failed ({} %)</span></h3>\n",
+                html_escape(p.name),
+                p.passed ? "pass" : "fail",
+                p.passed ? "pass" : "fail",
+                p.failed_pixels,
+                format_number(p.fail_percent));
             html += "<div class=\"compare-row\">\n";
             const std::pair<const std::string*, std::string> images[] = {
-                {&p.a_image, "A"}, {&p.b_image, "B"},
+                {&p.a_image, "A"},
+                {&p.b_image, "B"},
                 {&p.heatmap, fmt::format("|A - B|: black 0, yellow {}", format_number(p.heat_scale))}};
             for (const auto& [path, caption] : images)
-                html += fmt::format("<figure><a href=\"{0}\"><img src=\"{0}\" alt=\"{1} {2}\"></a><figcaption>{2}"
-                                    "</figcaption></figure>\n",
-                                    html_escape(relative_url(*path, folder)), html_escape(p.name), html_escape(caption));
-            html += "<div><table>\n<tr><th>channel</th><th class=\"num\">mean error</th><th class=\"num\">RMS</th>"
-                    "<th class=\"num\">PSNR</th><th class=\"num\">max error</th><th class=\"num\">at</th></tr>\n" +
-                    stats_rows(p.channels) + "</table>\n<p class=\"meaning\"><span class=\"legend\"></span> heatmap "
-                    "scale: black = equal, yellow = this pass's largest difference</p></div>\n";
+                html += fmt::format(
+                    "<figure><a href=\"{0}\"><img src=\"{0}\" alt=\"{1} {2}\"></a><figcaption>{2}"
+                    "</figcaption></figure>\n",
+                    html_escape(relative_url(*path, folder)),
+                    html_escape(p.name),
+                    html_escape(caption));
+            html +=
+                "<div><table>\n<tr><th>channel</th><th class=\"num\">mean error</th><th "
+                "class=\"num\">RMS</th>"
+                "<th class=\"num\">PSNR</th><th class=\"num\">max error</th><th "
+                "class=\"num\">at</th></tr>\n" +
+                stats_rows(p.channels) +
+                "</table>\n<p class=\"meaning\"><span class=\"legend\"></span> heatmap "
+                "scale: black = equal, yellow = this pass's largest difference</p></div>\n";
             html += "</div></div>\n";
         }
     }

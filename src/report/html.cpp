@@ -1,10 +1,8 @@
-#include <tdf/report/html.h>
-
+#include <fmt/format.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
-
-#include <fmt/format.h>
+#include <tdf/report/html.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -73,8 +71,8 @@ img.thumb { width: 96px; height: 96px; object-fit: contain; background: #fff; bo
 )css";
 
 bool unreserved(unsigned char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '.' ||
-           c == '_' || c == '~';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+           c == '.' || c == '_' || c == '~';
 }
 
 }  // namespace
@@ -84,12 +82,23 @@ std::string html_escape(const std::string& text) {
     out.reserve(text.size());
     for (const char c : text) {
         switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            case '\'': out += "&#39;"; break;
-            default: out += c;
+            case '&':
+                out += "&amp;";
+                break;
+            case '<':
+                out += "&lt;";
+                break;
+            case '>':
+                out += "&gt;";
+                break;
+            case '"':
+                out += "&quot;";
+                break;
+            case '\'':
+                out += "&#39;";
+                break;
+            default:
+                out += c;
         }
     }
     return out;
@@ -108,8 +117,10 @@ std::string relative_url(const std::string& path, const std::string& page_folder
         if (!first) url += '/';
         first = false;
         for (const unsigned char c : segment) {
-            if (unreserved(c)) url += char(c);
-            else url += fmt::format("%{:02X}", unsigned(c));
+            if (unreserved(c))
+                url += char(c);
+            else
+                url += fmt::format("%{:02X}", unsigned(c));
         }
     }
     return url;
@@ -120,11 +131,16 @@ std::string json_for_html(const Json& json) {
     std::string out;
     out.reserve(text.size());
     for (const char c : text) {
-        if (c == '<') out += "\\u003c";
-        else if (c == '>') out += "\\u003e";
-        else if (c == '&') out += "\\u0026";
-        else if (c == '\'') out += "\\u0027";
-        else out += c;
+        if (c == '<')
+            out += "\\u003c";
+        else if (c == '>')
+            out += "\\u003e";
+        else if (c == '&')
+            out += "\\u0026";
+        else if (c == '\'')
+            out += "\\u0027";
+        else
+            out += c;
     }
     return out;
 }
@@ -133,8 +149,11 @@ std::string html_page_begin(const std::string& title, const std::string& extra_h
     return fmt::format(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-        "<meta name=\"generator\" content=\"tdf\">\n<title>{}</title>\n<style>{}</style>\n{}</head>\n<body>\n",
-        html_escape(title), kStylesheet, extra_head);
+        "<meta name=\"generator\" "
+        "content=\"tdf\">\n<title>{}</title>\n<style>{}</style>\n{}</head>\n<body>\n",
+        html_escape(title),
+        kStylesheet,
+        extra_head);
 }
 
 std::string html_page_end(const std::string& scripts) { return scripts + "</body>\n</html>\n"; }
@@ -191,20 +210,23 @@ bool install_report_assets(const std::string& page_folder) {
     write_text_atomically((assets / "tdf_viewer.js").string(), kEmbeddedViewerJs);
     write_text_atomically((assets / "tdf_plot.js").string(), kEmbeddedPlotJs);
     const fs::path three = fs::path(web_modules_folder()) / "three";
-    const std::pair<const char*, const char*> files[] = {{"build/three.min.js", "three.min.js"},
-                                                         {"examples/js/loaders/GLTFLoader.js", "GLTFLoader.js"},
-                                                         {"examples/js/controls/OrbitControls.js", "OrbitControls.js"}};
+    const std::pair<const char*, const char*> files[] = {
+        {"build/three.min.js", "three.min.js"},
+        {"examples/js/loaders/GLTFLoader.js", "GLTFLoader.js"},
+        {"examples/js/controls/OrbitControls.js", "OrbitControls.js"}};
     for (const auto& [from, to] : files) {
         const fs::path source = three / from;
         std::error_code ec;
         if (!fs::is_regular_file(source, ec)) {
-            log_warning("report: {} not found, so the page's 3D view is off (run scripts/install-deps.sh, or set "
-                        "TDF_WEB_MODULES to a node_modules folder with three@0.147.0)",
-                        source.string());
+            log_warning(
+                "report: {} not found, so the page's 3D view is off (run scripts/install-deps.sh, or set "
+                "TDF_WEB_MODULES to a node_modules folder with three@0.147.0)",
+                source.string());
             return false;
         }
         const fs::path target = assets / to;
-        if (fs::is_regular_file(target, ec) && fs::file_size(target, ec) == fs::file_size(source, ec)) continue;
+        if (fs::is_regular_file(target, ec) && fs::file_size(target, ec) == fs::file_size(source, ec))
+            continue;
         write_text_atomically(target.string(), read_text_file(source.string()));
     }
     return true;

@@ -1,13 +1,11 @@
-#include <tdf/train/run_report.h>
-
+#include <fmt/format.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
 #include <tdf/render/texture.h>
 #include <tdf/tactile/tactile_map.h>
 #include <tdf/train/asset_export.h>
-
-#include <fmt/format.h>
+#include <tdf/train/run_report.h>
 
 #include <chrono>
 #include <filesystem>
@@ -36,8 +34,8 @@ Image load_normals(const std::string& stem) {
 
 const char* const kTurntablePasses[] = {"albedo", "lambertian", "tactile_normal", "shading_normal"};
 
-TurntableStage stage_frames(const std::string& folder, const std::string& subfolder, int views, std::string label,
-                            std::string description) {
+TurntableStage stage_frames(const std::string& folder, const std::string& subfolder, int views,
+                            std::string label, std::string description) {
     TurntableStage stage;
     stage.label = std::move(label);
     stage.description = std::move(description);
@@ -51,8 +49,9 @@ TurntableStage stage_frames(const std::string& folder, const std::string& subfol
 
 }  // namespace
 
-RunReport collect_run_report(const std::string& folder, const std::string& name, const std::string& scene_path,
-                             const TriangleMesh& mesh, const RunConfig& config) {
+RunReport collect_run_report(const std::string& folder, const std::string& name,
+                             const std::string& scene_path, const TriangleMesh& mesh,
+                             const RunConfig& config) {
     RunReport r;
     r.name = name;
     r.scene_path = scene_path;
@@ -61,7 +60,8 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
     const int views = config.turntable_views;
     const std::pair<const char*, const char*> stages[][2] = {
         {{"turntable_input", "input"}, {"the scene's own colour and tactile map", ""}},
-        {{"turntable_initialized", "after matching"}, {"the _initialized export (end of the matching phase)", ""}},
+        {{"turntable_initialized", "after matching"},
+         {"the _initialized export (end of the matching phase)", ""}},
         {{"turntable", "final"}, {"the exported asset", ""}}};
     for (const auto& s : stages) {
         TurntableStage stage = stage_frames(folder, s[0].first, views, s[0].second, s[1].first);
@@ -80,7 +80,9 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
             if (!line.empty()) r.losses.push_back(parse_json(line, base + "_losses.jsonl"));
     }
     if (exists(base + "_initialized_report.json"))
-        r.quality.push_back({"after matching", load_json_file(base + "_initialized_report.json").value("quality", Json::object())});
+        r.quality.push_back(
+            {"after matching",
+             load_json_file(base + "_initialized_report.json").value("quality", Json::object())});
     if (exists(base + "_report.json")) {
         Json report = load_json_file(base + "_report.json");
         r.quality.push_back({"final", report.value("quality", Json::object())});
@@ -91,11 +93,15 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
     if (exists(base + ".glb")) r.glb_path = base + ".glb";
     const TurntableFraming framing = turntable_framing(mesh);
     // The turntable's first view, so the 3D view starts where the strips start.
-    r.camera = ViewerCamera::from_orbit(0.0f, 0.0f, framing.radius, framing.fovy_degrees, framing.target, 512, 512);
+    r.camera =
+        ViewerCamera::from_orbit(0.0f, 0.0f, framing.radius, framing.fovy_degrees, framing.target, 512, 512);
     const std::pair<const char*, const char*> links[] = {
-        {".obj", "mesh + MTL naming both maps"},  {".glb", "glTF 2.0 binary"},
-        {"_config.json", "resolved configuration"}, {"_report.json", "quality and timings"},
-        {"_initialized_report.json", "quality after matching"}, {"_losses.jsonl", "losses per iteration"}};
+        {".obj", "mesh + MTL naming both maps"},
+        {".glb", "glTF 2.0 binary"},
+        {"_config.json", "resolved configuration"},
+        {"_report.json", "quality and timings"},
+        {"_initialized_report.json", "quality after matching"},
+        {"_losses.jsonl", "losses per iteration"}};
     for (const auto& [suffix, caption] : links)
         if (exists(base + suffix)) r.links.push_back({caption, base + suffix});
     return r;
@@ -106,7 +112,8 @@ void write_optimize_report(const std::string& folder, const std::string& name, c
     const auto start = std::chrono::steady_clock::now();
     const int views = config.turntable_views, resolution = config.turntable_resolution;
     if (views > 0) {
-        write_turntable(folder, "turntable_input", assets.mesh, *assets.scene, assets.material, views, resolution);
+        write_turntable(
+            folder, "turntable_input", assets.mesh, *assets.scene, assets.material, views, resolution);
         const std::string stem = folder + "/" + name + "_initialized";
         if (exists(stem + "_albedo.png")) {
             const MipTexture albedo(load_albedo(stem)), tactile(load_normals(stem));
@@ -114,12 +121,14 @@ void write_optimize_report(const std::string& folder, const std::string& name, c
             material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
             material.albedo = &albedo;
             material.tactile = &tactile;
-            write_turntable(folder, "turntable_initialized", assets.mesh, *assets.scene, material, views, resolution);
+            write_turntable(
+                folder, "turntable_initialized", assets.mesh, *assets.scene, material, views, resolution);
         }
     }
     const std::string page = folder + "/" + name + "_report.html";
     write_run_report(page, collect_run_report(folder, name, scene_path, assets.mesh, config));
-    log_info("report: {} ({:.1f} s)", page,
+    log_info("report: {} ({:.1f} s)",
+             page,
              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 

@@ -30,19 +30,46 @@ int main(int argc, char** argv) {
                 }
             const std::string job = "job" + std::to_string(j);
             tdf::write_png(out + "/jobs/" + job + "/thumb.png", thumb);
-            tdf::write_text_atomically(out + "/jobs/" + job + "/" + job + "_report.html",
-                                       tdf::html_page_begin(job) + "<h1>" + job + "</h1>\n" + tdf::html_page_end());
+            tdf::write_text_atomically(
+                out + "/jobs/" + job + "/" + job + "_report.html",
+                tdf::html_page_begin(job) + "<h1>" + job + "</h1>\n" + tdf::html_page_end());
         }
         std::vector<tdf::BatchRow> rows = {
-            {"job0", "ok", "", 41.5, {{"albedo_psnr_foreground_db", 27.3}, {"tactile_mean_cosine", 0.91}},
-             out + "/jobs/job0/job0_report.html", out + "/jobs/job0/thumb.png"},
-            {"broken_scene", "failed", "scenes/broken/scene.json: mesh '../missing.obj' does not exist", 0.2, {}, "", ""},
-            {"job1", "ok", "", 7.25, {{"albedo_psnr_foreground_db", 31.9}, {"tactile_mean_cosine", 0.84}},
-             out + "/jobs/job1/job1_report.html", out + "/jobs/job1/thumb.png"},
-            {"slow_one", "timeout", "stopped after 3600 s (batch time limit)", 3600, {{"tactile_mean_cosine", 0.5}}, "",
+            {"job0",
+             "ok",
+             "",
+             41.5,
+             {{"albedo_psnr_foreground_db", 27.3}, {"tactile_mean_cosine", 0.91}},
+             out + "/jobs/job0/job0_report.html",
+             out + "/jobs/job0/thumb.png"},
+            {"broken_scene",
+             "failed",
+             "scenes/broken/scene.json: mesh '../missing.obj' does not exist",
+             0.2,
+             {},
+             "",
+             ""},
+            {"job1",
+             "ok",
+             "",
+             7.25,
+             {{"albedo_psnr_foreground_db", 31.9}, {"tactile_mean_cosine", 0.84}},
+             out + "/jobs/job1/job1_report.html",
+             out + "/jobs/job1/thumb.png"},
+            {"slow_one",
+             "timeout",
+             "stopped after 3600 s (batch time limit)",
+             3600,
+             {{"tactile_mean_cosine", 0.5}},
+             "",
              ""}};
         if (argc >= 3)
-            rows.push_back({"pebble_sphere", "ok", "", 12.0, {{"albedo_psnr_foreground_db", 24.4}}, argv[2],
+            rows.push_back({"pebble_sphere",
+                            "ok",
+                            "",
+                            12.0,
+                            {{"albedo_psnr_foreground_db", 24.4}},
+                            argv[2],
                             argc >= 4 ? argv[3] : ""});
         tdf::write_batch_index(out + "/index.html", "batch: hand-made rows", rows);
         std::printf("wrote %s/index.html\n", out.c_str());

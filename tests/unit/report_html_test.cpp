@@ -1,7 +1,6 @@
 // The report module's building blocks: escaping, relative links, base64, JSON in HTML.
-#include <tdf/report/html.h>
-
 #include <gtest/gtest.h>
+#include <tdf/report/html.h>
 
 #include <filesystem>
 
@@ -9,7 +8,8 @@ namespace tdf {
 namespace {
 
 TEST(ReportHtml, EscapesMarkupCharacters) {
-    EXPECT_EQ(html_escape("<a href='x'>\"R&D\"</a>"), "&lt;a href=&#39;x&#39;&gt;&quot;R&amp;D&quot;&lt;/a&gt;");
+    EXPECT_EQ(html_escape("<a href='x'>\"R&D\"</a>"),
+              "&lt;a href=&#39;x&#39;&gt;&quot;R&amp;D&quot;&lt;/a&gt;");
     EXPECT_EQ(html_escape("plain text 123"), "plain text 123");
 }
 

@@ -1,5 +1,6 @@
 // The three page writers with hand-made inputs: what they link, what they refuse, the order of
 // rows. (The pages are opened in a real browser by the `browser` ctest label, report_browser.cmake.)
+#include <gtest/gtest.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
@@ -10,11 +11,9 @@
 #include <tdf/report/run_report.h>
 #include <tdf/scene/procedural_mesh.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <filesystem>
+
+#include "common/test_paths.h"
 
 namespace tdf {
 namespace {
@@ -49,11 +48,21 @@ TEST(ReportBatchIndex, ListsEveryJobWithRelativeLinksAndQualityColumns) {
     const std::string folder = fresh_folder("batch");
     write_png(folder + "/jobs/a/thumb.png", gradient(8, 0.2f));
     write_text_atomically(folder + "/jobs/a/a_report.html", html_page_begin("a") + html_page_end());
-    std::vector<BatchRow> rows = {
-        {"a", "ok", "", 12.5, {{"albedo_psnr_foreground_db", 31.2}}, folder + "/jobs/a/a_report.html",
-         folder + "/jobs/a/thumb.png"},
-        {"b <odd>", "failed", "b/scene.json: mesh 'x.obj' does not exist", 0.4, {}, folder + "/jobs/b/none.html", ""},
-        {"c", "ok", "", -1, {{"tactile_mean_cosine", 0.8}}, "", ""}};
+    std::vector<BatchRow> rows = {{"a",
+                                   "ok",
+                                   "",
+                                   12.5,
+                                   {{"albedo_psnr_foreground_db", 31.2}},
+                                   folder + "/jobs/a/a_report.html",
+                                   folder + "/jobs/a/thumb.png"},
+                                  {"b <odd>",
+                                   "failed",
+                                   "b/scene.json: mesh 'x.obj' does not exist",
+                                   0.4,
+                                   {},
+                                   folder + "/jobs/b/none.html",
+                                   ""},
+                                  {"c", "ok", "", -1, {{"tactile_mean_cosine", 0.8}}, "", ""}};
     write_batch_index(folder + "/index.html", "batch", rows);
     const std::string html = read_text_file(folder + "/index.html");
     EXPECT_NE(html.find("href=\"jobs/a/a_report.html\""), std::string::npos);
@@ -88,10 +97,24 @@ TEST(ReportCompare, WritesPreviewsAndHeatmapsAndPutsFailuresFirst) {
     report.thresholds = options;
     const std::string images = report_files_folder(folder + "/page.html");
     EXPECT_EQ(images, folder + "/page_files");
-    report.files.push_back(compare_file_entry("equal.exr", "a/equal.exr", "b/equal.exr", a, same,
-                                              compare_layers(a, same, options), options, images, "f0"));
-    report.files.push_back(compare_file_entry("differs.exr", "a/differs.exr", "b/differs.exr", a, other,
-                                              compare_layers(a, other, options), options, images, "f1"));
+    report.files.push_back(compare_file_entry("equal.exr",
+                                              "a/equal.exr",
+                                              "b/equal.exr",
+                                              a,
+                                              same,
+                                              compare_layers(a, same, options),
+                                              options,
+                                              images,
+                                              "f0"));
+    report.files.push_back(compare_file_entry("differs.exr",
+                                              "a/differs.exr",
+                                              "b/differs.exr",
+                                              a,
+                                              other,
+                                              compare_layers(a, other, options),
+                                              options,
+                                              images,
+                                              "f1"));
     ASSERT_EQ(report.files[1].passes.size(), 2u);
     EXPECT_EQ(report.files[1].result, "fail");
     EXPECT_EQ(report.files[1].passes[0].name, "albedo") << "failing pass first";
@@ -102,12 +125,16 @@ TEST(ReportCompare, WritesPreviewsAndHeatmapsAndPutsFailuresFirst) {
     const Image heat = read_image(report.files[1].passes[0].heatmap);
     EXPECT_GT(heat.at(3, 3, 0), 0.9f) << "uniform largest difference maps to the top of the ramp";
 
+    report.files.push_back(compare_file_problem(
+        "missing.exr", "a/missing.exr", "b/missing.exr", "missing_b", "B has no missing.exr"));
     write_compare_report(folder + "/page.html", report);
     const std::string html = read_text_file(folder + "/page.html");
     ASSERT_NE(html.find("differs.exr"), std::string::npos);
     EXPECT_LT(html.find("differs.exr"), html.find("equal.exr")) << "failures first";
     EXPECT_NE(html.find("src=\"page_files/f1_albedo_diff.png\""), std::string::npos);
-    EXPECT_NE(html.find("1 failed"), std::string::npos);
+    EXPECT_NE(html.find("2 failed"), std::string::npos);
+    ASSERT_NE(html.find("B has no missing.exr"), std::string::npos);
+    EXPECT_LT(html.find("missing.exr"), html.find("equal.exr")) << "problems are failures too";
 }
 
 TEST(ReportRun, EmbedsTheModelAndLinksEveryImage) {

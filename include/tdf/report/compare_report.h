@@ -50,6 +50,12 @@ CompareFile compare_file_entry(const std::string& label, const std::string& a_pa
                                const CompareResult& overall, const CompareOptions& options,
                                const std::string& image_folder, const std::string& prefix);
 
+/// An entry without images for a file that could not be compared: `result` is one of
+/// "size_mismatch", "error", "missing_a", "missing_b"; `message` is the one line shown.
+CompareFile compare_file_problem(const std::string& label, const std::string& a_path,
+                                 const std::string& b_path, const std::string& result,
+                                 const std::string& message);
+
 /// Writes the page to `html_path` (atomically), files ordered failures first (then by label).
 void write_compare_report(const std::string& html_path, const CompareReport& report);
 

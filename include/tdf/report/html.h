@@ -45,8 +45,8 @@ inline constexpr const char* kReportAssetsFolder = "report_assets";
 /// Writes `<page_folder>/report_assets/`: three.min.js, GLTFLoader.js, OrbitControls.js (three.js
 /// r147, copied from the npm package that scripts/install-deps.sh installs into web/node_modules;
 /// the environment variable TDF_WEB_MODULES names another node_modules folder) and tdf_viewer.js
-/// and tdf_plot.js (built into tdf). Returns false, after a warning, when three.js is not installed: pages still
-/// work and say so in place of the 3D view. Files already there with the same size are kept.
+/// and tdf_plot.js (built into tdf). Returns false, after a warning, when three.js is not installed: pages
+/// still work and say so in place of the 3D view. Files already there with the same size are kept.
 bool install_report_assets(const std::string& page_folder);
 
 /// The node_modules folder install_report_assets copies from.

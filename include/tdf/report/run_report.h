@@ -18,8 +18,8 @@ namespace tdf {
 
 /// One row of turntable strips: the frames of each pass, in azimuth order.
 struct TurntableStage {
-    std::string label;        ///< e.g. "input"
-    std::string description;  ///< one line under the label
+    std::string label;                                       ///< e.g. "input"
+    std::string description;                                 ///< one line under the label
     std::map<std::string, std::vector<std::string>> frames;  ///< pass name -> image paths
 };
 
@@ -41,10 +41,10 @@ struct RunReport {
     /// Quality columns, e.g. {"after matching", {...}}, {"final", {...}}: the objects under
     /// "quality" in `_initialized_report.json` / `_report.json`. Known keys get their meaning.
     std::vector<std::pair<std::string, Json>> quality;
-    Json timings = Json::object();  ///< `_report.json` without "quality": seconds, threads, seed
-    Json config = Json::object();   ///< the resolved configuration
-    std::string glb_path;           ///< the exported .glb; empty: no 3D view
-    ViewerCamera camera;            ///< the 3D view's start camera
+    Json timings = Json::object();   ///< `_report.json` without "quality": seconds, threads, seed
+    Json config = Json::object();    ///< the resolved configuration
+    std::string glb_path;            ///< the exported .glb; empty: no 3D view
+    ViewerCamera camera;             ///< the 3D view's start camera
     std::vector<ReportImage> links;  ///< other files worth a link (OBJ, JSON, ...)
 };
 

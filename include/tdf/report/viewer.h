@@ -20,13 +20,13 @@ struct ViewerCamera {
     float fovy_degrees = 50.0f;
     float near_plane = 0.01f;
     float far_plane = 100.0f;
-    int width = 512;   ///< canvas size in CSS pixels
+    int width = 512;  ///< canvas size in CSS pixels
     int height = 512;
     /// For `tdf render` of the same view (tests): the orbit parameters this camera came from.
     float elevation_degrees = 0, azimuth_degrees = 0, radius = 3;
 
-    static ViewerCamera from_orbit(float elevation_deg, float azimuth_deg, float radius, float fovy_deg, Vec3f target,
-                                   int width, int height);
+    static ViewerCamera from_orbit(float elevation_deg, float azimuth_deg, float radius, float fovy_deg,
+                                   Vec3f target, int width, int height);
 };
 
 /// Writes `<page_folder>/<stem>_model.js` (the .glb as base64) and returns the viewer's HTML: the

@@ -11,8 +11,9 @@ namespace tdf {
 
 /// Reads what a finished run left in `folder` (`<name>_*.json`, `_losses.jsonl`, maps, .glb,
 /// `turntable*/` frames) into a RunReport. Only files that exist are listed.
-RunReport collect_run_report(const std::string& folder, const std::string& name, const std::string& scene_path,
-                             const TriangleMesh& mesh, const RunConfig& config);
+RunReport collect_run_report(const std::string& folder, const std::string& name,
+                             const std::string& scene_path, const TriangleMesh& mesh,
+                             const RunConfig& config);
 
 /// Renders the input (the scene's own textures, `turntable_input/`) and the after-matching asset
 /// (the exported `<name>_initialized` maps, `turntable_initialized/`) with the cameras of
