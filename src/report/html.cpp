@@ -50,7 +50,7 @@ figcaption { color: var(--muted); font-size: 12px; margin-top: 2px; max-width: 2
 pre { background: var(--card); border: 1px solid var(--line); padding: 10px; overflow: auto; max-height: 480px; font-size: 12px; }
 details summary { cursor: pointer; font-weight: 600; }
 .tdf-viewer { display: flex; gap: 16px; align-items: flex-start; flex-wrap: wrap; }
-.tdf-viewer canvas { width: 512px; height: 512px; border: 1px solid var(--line); border-radius: 4px; background: #30343a; touch-action: none; }
+.tdf-viewer canvas { width: 512px; height: 512px; outline: 1px solid var(--line); border-radius: 4px; background: #30343a; touch-action: none; }
 .tdf-viewer .controls { display: grid; grid-template-columns: auto 180px; gap: 6px 10px; align-items: center; }
 .tdf-viewer-status { color: var(--muted); grid-column: 1 / span 2; max-width: 320px; }
 .tdf-viewer[data-state=error] .tdf-viewer-status, .tdf-viewer[data-state=unavailable] .tdf-viewer-status { color: var(--fail); }

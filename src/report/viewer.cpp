@@ -9,6 +9,11 @@ namespace tdf {
 
 namespace fs = std::filesystem;
 
+namespace {
+// Dark grey: the light and dark parts of a model both stand out; the page's colour input changes it.
+constexpr const char* kBackground = "#30343a";
+}  // namespace
+
 ViewerCamera ViewerCamera::from_orbit(float elevation_deg, float azimuth_deg, float radius_, float fovy_deg,
                                       Vec3f target_, int width_, int height_) {
     const Camera camera =
@@ -47,7 +52,7 @@ std::string viewer_html(const std::string& page_folder, const std::string& glb_p
                         {{"elevation", camera.elevation_degrees},
                          {"azimuth", camera.azimuth_degrees},
                          {"radius", camera.radius}}},
-                       {"background", "#30343a"}};
+                       {"background", kBackground}};
     return fmt::format(
         "<div class=\"tdf-viewer\" data-model=\"{id}\" data-state=\"loading\" data-camera=\"{camera}\">\n"
         "<canvas width=\"{w}\" height=\"{h}\" style=\"width:{w}px;height:{h}px\"></canvas>\n"
@@ -60,13 +65,15 @@ std::string viewer_html(const std::string& page_folder, const std::string& glb_p
         "value=\"25\" data-control=\"light-elevation\">\n"
         "<label for=\"{id}-nm\">normal map</label><span><input id=\"{id}-nm\" type=\"checkbox\" checked "
         "data-control=\"normal-map\"></span>\n"
+        "<label for=\"{id}-bg\">background</label><span><input id=\"{id}-bg\" type=\"color\" value=\"{bg}\" "
+        "data-control=\"background\"></span>\n"
         "<span></span><span><button type=\"button\" data-control=\"reset\">reset view</button></span>\n"
         "<div class=\"tdf-viewer-status\">the 3D view needs JavaScript</div>\n"
         "<div class=\"tdf-viewer-status-file\"><a href=\"{glb}\">{glb_name}</a> (glTF 2.0 binary)</div>\n"
         "</div>\n</div>\n",
         fmt::arg("id", html_escape(model_id)),
         fmt::arg("camera", html_escape(spec.dump())),
-        fmt::arg("w", camera.width),
+        fmt::arg("bg", kBackground), fmt::arg("w", camera.width),
         fmt::arg("h", camera.height),
         fmt::arg("glb", html_escape(relative_url(glb_path, page_folder))),
         fmt::arg("glb_name", html_escape(fs::path(glb_path).filename().string())));

@@ -66,7 +66,7 @@
     camera.up.set(0, 1, 0);
     camera.lookAt(target);
 
-    var ambient = new THREE.AmbientLight(0xffffff, 0.15);
+    var ambient = new THREE.AmbientLight(0xffffff, 0.25);
     var sun = new THREE.DirectionalLight(0xffffff, 2.2);
     scene.add(ambient, sun, sun.target);
 
@@ -79,6 +79,7 @@
     var lightElevation = container.querySelector('[data-control=light-elevation]');
     var normalToggle = container.querySelector('[data-control=normal-map]');
     var resetButton = container.querySelector('[data-control=reset]');
+    var backgroundInput = container.querySelector('[data-control=background]');
     var materials = [];
 
     // The light is given relative to the camera (azimuth right of the view direction, elevation
@@ -106,6 +107,12 @@
           m.normalMap = normalToggle.checked ? m.userData.tdfNormalMap : null;
           m.needsUpdate = true;
         });
+        render();
+      });
+    }
+    if (backgroundInput) {
+      backgroundInput.addEventListener('input', function () {
+        renderer.setClearColor(new THREE.Color(backgroundInput.value), 1);
         render();
       });
     }
