@@ -8,6 +8,9 @@
 #include <tdf/io/image_io.h>
 #include <tdf/render/folder_compare.h>
 #include <tdf/render/image_compare.h>
+#include <tdf/report/compare_report.h>
+
+#include <fmt/format.h>
 
 #include <cmath>
 #include <cstdio>
@@ -24,6 +27,7 @@ struct CompareCliOptions {
     CompareOptions compare;
     std::string diff;
     float diff_scale = 16.f;
+    std::string html;
     bool json = false;
     bool allow_missing = false;
     bool allow_extra = false;
@@ -95,10 +99,21 @@ int run_compare_files(const CompareCliOptions& o) {
                      o.b.c_str(),
                      ib.width(),
                      ib.height());
+        if (!o.html.empty())
+            write_compare_report(o.html, {"tdf compare", o.compare,
+                                          {compare_file_problem(o.a + " vs " + o.b, o.a, o.b, "size_mismatch",
+                                                                fmt::format("A is {}x{} but B is {}x{}", ia.width(),
+                                                                            ia.height(), ib.width(), ib.height()))}});
         return kExitSizeMismatch;
     }
     const CompareResult r = compare_layers(a, b, o.compare, o.a, o.b);
     if (!o.diff.empty()) write_exr(o.diff, difference_layers(a, b, o.diff_scale));
+    if (!o.html.empty())
+        write_compare_report(o.html, {"tdf compare", o.compare,
+                                      {compare_file_entry(std::filesystem::path(o.a).filename().string() + " vs " +
+                                                              std::filesystem::path(o.b).filename().string(),
+                                                          o.a, o.b, a, b, r, o.compare,
+                                                          report_files_folder(o.html), "file")}});
     if (o.json) {
         Json channels = Json::array(), layers = Json::array();
         for (const auto& s : r.channels) channels.push_back(stats_json(s));
@@ -151,6 +166,38 @@ int run_compare_files(const CompareCliOptions& o) {
     return r.passed ? kExitPass : kExitFail;
 }
 
+// The --html page of a folder comparison: compared files are read again for their previews
+// (the comparison keeps numbers, not pixels); the others get a one-line entry.
+void write_folder_page(const CompareCliOptions& o, const FolderComparison& r) {
+    CompareReport report{"tdf compare " + r.a + " " + r.b, o.compare, {}};
+    const std::string images = report_files_folder(o.html);
+    int index = 0;
+    for (const FileComparison& f : r.files) {
+        const std::string a = (std::filesystem::path(r.a) / f.path).string();
+        const std::string b = (std::filesystem::path(r.b) / f.path).string();
+        switch (f.status) {
+            case FileComparison::Status::Compared:
+                report.files.push_back(compare_file_entry(f.path, a, b, read_comparable_image(a),
+                                                          read_comparable_image(b), f.result, o.compare, images,
+                                                          fmt::format("file{:04d}", index++)));
+                break;
+            case FileComparison::Status::MissingInB:
+                report.files.push_back(compare_file_problem(f.path, a, b, "missing_b", "only in " + r.a));
+                break;
+            case FileComparison::Status::ExtraInB:
+                report.files.push_back(compare_file_problem(f.path, a, b, "missing_a", "only in " + r.b));
+                break;
+            case FileComparison::Status::SizeMismatch:
+                report.files.push_back(compare_file_problem(f.path, a, b, "size_mismatch", f.message));
+                break;
+            case FileComparison::Status::Error:
+                report.files.push_back(compare_file_problem(f.path, a, b, "error", f.message));
+                break;
+        }
+    }
+    write_compare_report(o.html, report);
+}
+
 int run_compare_folders(const CompareCliOptions& o) {
     FolderCompareOptions fo;
     fo.compare = o.compare;
@@ -160,6 +207,7 @@ int run_compare_folders(const CompareCliOptions& o) {
     fo.diff_scale = o.diff_scale;
     const FolderComparison r = compare_folders(o.a, o.b, fo);
     const FolderTotals& t = r.totals;
+    if (!o.html.empty()) write_folder_page(o, r);
     if (o.json) {
         Json files = Json::array();
         for (const FileComparison& f : r.files) {
@@ -324,6 +372,8 @@ Command register_compare(CLI::App& root) {
         "folder for every failing file");
     app->add_option("--diff-scale", o->diff_scale, "scale of the difference image (finite, > 0)")
         ->capture_default_str();
+    app->add_option("--html", o->html,
+                    "write an HTML page with A, B and a difference heatmap per pass (images in <page>_files/)");
     app->add_flag("--json", o->json, "print the report as JSON on stdout")->capture_default_str();
     command.app = app;
     command.run = [o] { return run_compare(*o); };

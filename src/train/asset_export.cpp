@@ -43,36 +43,50 @@ void write_asset(const std::string& folder, const std::string& name, const std::
              maps.albedo.height());
 }
 
-std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const EmbreeScene& scene,
-                                         const BakedMaps& maps, int views, int resolution) {
-    std::vector<std::string> written;
-    if (views <= 0) return written;
-    const MipTexture albedo(maps.albedo), tactile(maps.tactile_normal);
-    SurfaceMaterial material;
-    material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
-    material.albedo = &albedo;
-    material.tactile = &tactile;
-    RenderSettings settings;
-    settings.shading = ShadingMode::Visualizer;
-    const Renderer renderer(mesh, scene, material, settings);
+TurntableFraming turntable_framing(const TriangleMesh& mesh) {
     // Frame the object whatever its units: a sphere around the box centre through the farthest
     // vertex fills the view.
     const Bounds3 bounds = compute_bounds(mesh);
     float extent = 0.0f;
     for (const Vec3f& p : mesh.positions) extent = std::max(extent, length(p - bounds.center()));
-    const float fovy = 50.0f;
-    const float radius = 1.05f * extent / std::sin(radians(fovy) * 0.5f);
+    TurntableFraming framing;
+    framing.target = bounds.center();
+    framing.radius = 1.05f * extent / std::sin(radians(framing.fovy_degrees) * 0.5f);
+    return framing;
+}
+
+std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const EmbreeScene& scene,
+                                         const BakedMaps& maps, int views, int resolution) {
+    if (views <= 0) return {};
+    const MipTexture albedo(maps.albedo), tactile(maps.tactile_normal);
+    SurfaceMaterial material;
+    material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
+    material.albedo = &albedo;
+    material.tactile = &tactile;
+    return write_turntable(folder, "turntable", mesh, scene, material, views, resolution);
+}
+
+std::vector<std::string> write_turntable(const std::string& folder, const std::string& subfolder,
+                                         const TriangleMesh& mesh, const EmbreeScene& scene,
+                                         const SurfaceMaterial& material, int views, int resolution) {
+    std::vector<std::string> written;
+    if (views <= 0) return written;
+    RenderSettings settings;
+    settings.shading = ShadingMode::Visualizer;
+    const Renderer renderer(mesh, scene, material, settings);
+    const TurntableFraming framing = turntable_framing(mesh);
     const std::vector<Pass> passes = {Pass::Albedo, Pass::Lambertian, Pass::TactileNormal, Pass::ShadingNormal};
     for (int k = 0; k < views; ++k) {
         const float azimuth = 360.0f * float(k) / float(views);
-        Camera camera = Camera::orbit(0.0f, azimuth, radius, fovy, resolution, resolution, bounds.center());
-        camera.near_plane = std::min(camera.near_plane, 0.01f * radius);
+        Camera camera = Camera::orbit(0.0f, azimuth, framing.radius, framing.fovy_degrees, resolution, resolution,
+                                      framing.target);
+        camera.near_plane = std::min(camera.near_plane, 0.01f * framing.radius);
         Light light;  // directional from the camera, visualizer ambient (spec 3.9)
         light.vector = camera.back;
         light.ambient = 0.1f;
         const Frame frame = renderer.render(camera, light, passes);
         for (std::size_t p = 0; p < passes.size(); ++p) {
-            const std::string path = fmt::format("{}/turntable/{}_{:03d}.png", folder, pass_name(passes[p]), k);
+            const std::string path = fmt::format("{}/{}/{}_{:03d}.png", folder, subfolder, pass_name(passes[p]), k);
             write_png(path, preview_image(passes[p], frame.images[p], frame.coverage), 8, Quantize::Truncate);
             written.push_back(path);
         }

@@ -11,6 +11,7 @@
 #include <tdf/render/scene_assets.h>
 #include <tdf/tactile/tactile_map.h>
 #include <tdf/train/asset_export.h>
+#include <tdf/train/run_report.h>
 #include <tdf/train/trainer.h>
 
 #include <fmt/format.h>
@@ -195,6 +196,7 @@ void run_optimize(const OptimizeOptions& options) {
     write_text_atomically(base + "_report.json", report.dump(2) + "\n");
     log_info("held-out quality: albedo PSNR {:.2f} dB (foreground), tactile mean cosine {:.4f}; report in {}_report.json",
              quality.albedo_psnr_foreground, quality.tactile_mean_cosine, base);
+    write_optimize_report(options.output_dir, name, options.scene_path, *assets, config);  // <name>_report.html
 }
 
 }  // namespace tdf

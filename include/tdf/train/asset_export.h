@@ -5,6 +5,7 @@
 /// renders of the result.
 #include <tdf/field/texture_field.h>
 #include <tdf/mesh/triangle_mesh.h>
+#include <tdf/render/renderer.h>
 #include <tdf/scene/embree_scene.h>
 #include <tdf/train/run_config.h>
 #include <tdf/train/texture_bake.h>
@@ -31,5 +32,20 @@ void write_asset(const std::string& folder, const std::string& name, const std::
 /// `scene` must have been built from `mesh`.
 std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const EmbreeScene& scene,
                                          const BakedMaps& maps, int views, int resolution);
+
+/// The same renders of `mesh` with any material (e.g. the scene's input textures) into
+/// `<folder>/<subfolder>/<pass>_<k>.png`.
+std::vector<std::string> write_turntable(const std::string& folder, const std::string& subfolder,
+                                         const TriangleMesh& mesh, const EmbreeScene& scene,
+                                         const SurfaceMaterial& material, int views, int resolution);
+
+/// The turntable's cameras: Camera::orbit(0, 360 k / views, radius, fovy_degrees, ..., target),
+/// with the target at the bounding-box centre and the radius that fits the farthest vertex.
+struct TurntableFraming {
+    Vec3f target;
+    float radius = 3.0f;
+    float fovy_degrees = 50.0f;
+};
+TurntableFraming turntable_framing(const TriangleMesh& mesh);
 
 }  // namespace tdf
