@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
 # Installs every build and test dependency of tdf from Debian packages (Debian 12).
+# slurm-wlm and munge: `tdf batch --engine slurm` and its test (tests/batch/), which starts a
+# throw-away single-node Slurm; the postinst scripts cannot start services here, which is fine.
 # Safe to run again: apt-get skips what is already installed.
 set -euo pipefail
 SUDO=""
@@ -10,5 +12,6 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   build-essential cmake ninja-build pkg-config git \
   libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libcgal-dev libeigen3-dev \
   libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev libfftw3-dev nlohmann-json3-dev libcli11-dev \
-  libfmt-dev libtinygltf-dev libpng-dev libjpeg-dev zlib1g-dev >/dev/null
+  libfmt-dev libtinygltf-dev libpng-dev libjpeg-dev zlib1g-dev \
+  slurm-wlm munge >/dev/null
 echo "install-deps: all packages present"

@@ -1,0 +1,173 @@
+#include <tdf/batch/batch_folder.h>
+
+#include <tdf/core/atomic_file.h>
+#include <tdf/core/error.h>
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <ctime>
+#include <filesystem>
+
+namespace tdf {
+
+namespace fs = std::filesystem;
+
+const char* job_status_name(JobStatus status) {
+    switch (status) {
+        case JobStatus::Pending: return "pending";
+        case JobStatus::Running: return "running";
+        case JobStatus::Done: return "done";
+        case JobStatus::Failed: return "failed";
+        case JobStatus::Interrupted: return "interrupted";
+    }
+    return "pending";
+}
+
+namespace {
+JobStatus parse_status(const std::string& s) {
+    for (JobStatus status :
+         {JobStatus::Pending, JobStatus::Running, JobStatus::Done, JobStatus::Failed, JobStatus::Interrupted})
+        if (s == job_status_name(status)) return status;
+    throw_error("unknown job status '{}'", s);
+}
+}  // namespace
+
+Json JobState::to_json() const {
+    return {{"status", job_status_name(status)},
+            {"exit_code", exit_code},
+            {"signal", signal},
+            {"error", error},
+            {"attempts", attempts},
+            {"seconds", seconds},
+            {"seconds_total", seconds_total},
+            {"started", started},
+            {"finished", finished},
+            {"host", host},
+            {"pid", pid},
+            {"slurm_job", slurm_job},
+            {"command_line", command_line},
+            {"output", output},
+            {"thumbnail", thumbnail},
+            {"quality", quality}};
+}
+
+JobState JobState::from_json(const Json& json) {
+    JobState s;
+    s.status = parse_status(json.value("status", std::string("pending")));
+    s.exit_code = json.value("exit_code", -1);
+    s.signal = json.value("signal", 0);
+    s.error = json.value("error", std::string());
+    s.attempts = json.value("attempts", 0);
+    s.seconds = json.value("seconds", 0.0);
+    s.seconds_total = json.value("seconds_total", 0.0);
+    s.started = json.value("started", std::string());
+    s.finished = json.value("finished", std::string());
+    s.host = json.value("host", std::string());
+    s.pid = json.value("pid", 0);
+    s.slurm_job = json.value("slurm_job", std::string());
+    s.command_line = json.value("command_line", std::string());
+    s.output = json.value("output", std::string());
+    s.thumbnail = json.value("thumbnail", std::string());
+    if (json.contains("quality")) s.quality = json["quality"];
+    return s;
+}
+
+std::string host_name() {
+    char host[256] = {};
+    gethostname(host, sizeof host - 1);
+    return host;
+}
+
+std::string utc_timestamp() {
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    gmtime_r(&now, &tm);
+    char text[32];
+    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return text;
+}
+
+BatchFolder BatchFolder::create(const std::string& root, const std::vector<BatchJob>& jobs,
+                                const std::string& tdf_executable, const std::string& working_folder) {
+    if (root.empty()) throw_error("-o/--output is empty: give the batch folder");
+    BatchFolder folder;
+    folder.m_root = fs::absolute(root).lexically_normal().string();
+    while (folder.m_root.size() > 1 && folder.m_root.back() == '/') folder.m_root.pop_back();
+    const std::string manifest = folder.path("manifest.jsonl");
+    if (fs::exists(manifest)) {
+        const std::vector<BatchJob> recorded = read_manifest(manifest);
+        const std::string changes = describe_manifest_changes(recorded, jobs);
+        if (!changes.empty())
+            throw_error("batch folder '{}' was made from another manifest: {}; run the same manifest to continue it, or "
+                        "use another -o",
+                        root, changes);
+        BatchFolder existing = open(root);
+        return existing;
+    }
+    ensure_folder(folder.path("state"));
+    ensure_folder(folder.path("logs"));
+    folder.m_jobs = jobs;
+    folder.m_tdf = tdf_executable;
+    folder.m_working_folder = working_folder;
+    write_text_atomically(folder.path("batch.json"), Json({{"tdf", tdf_executable},
+                                                           {"working_folder", working_folder},
+                                                           {"created", utc_timestamp()},
+                                                           {"jobs", jobs.size()}})
+                                                         .dump(2) +
+                                                         "\n");
+    // The manifest last: its presence marks a complete batch folder.
+    write_text_atomically(manifest, manifest_to_jsonl(jobs));
+    return folder;
+}
+
+BatchFolder BatchFolder::open(const std::string& root) {
+    BatchFolder folder;
+    folder.m_root = fs::absolute(root).lexically_normal().string();
+    while (folder.m_root.size() > 1 && folder.m_root.back() == '/') folder.m_root.pop_back();
+    const std::string manifest = folder.path("manifest.jsonl");
+    if (!fs::exists(manifest))
+        throw_error("'{}' is not a batch folder (no manifest.jsonl; make one with `tdf batch run MANIFEST -o {}`)", root,
+                    root);
+    folder.m_jobs = read_manifest(manifest);
+    const Json settings = load_json_file(folder.path("batch.json"));
+    folder.m_tdf = settings.value("tdf", std::string());
+    folder.m_working_folder = settings.value("working_folder", std::string());
+    return folder;
+}
+
+std::size_t BatchFolder::index_of(const std::string& name) const {
+    for (std::size_t k = 0; k < m_jobs.size(); ++k)
+        if (m_jobs[k].name == name) return k;
+    throw_error("batch folder '{}' has no job '{}'", m_root, name);
+}
+
+std::string BatchFolder::path(const std::string& relative) const { return m_root + "/" + relative; }
+
+std::string BatchFolder::output_folder(const BatchJob& job) const {
+    if (job.output.empty()) return path("jobs/" + job.name);
+    const fs::path out(job.output);
+    return (out.is_absolute() ? out : fs::path(m_root) / out).lexically_normal().string();
+}
+
+std::string BatchFolder::state_path(const BatchJob& job) const { return path("state/" + job.name + ".json"); }
+std::string BatchFolder::log_path(const BatchJob& job) const { return path("logs/" + job.name + ".log"); }
+
+JobState BatchFolder::read_state(const BatchJob& job) const {
+    const std::string file = state_path(job);
+    if (!fs::exists(file)) return {};
+    JobState state = JobState::from_json(load_json_file(file));
+    if (state.status == JobStatus::Running && state.host == host_name() && state.pid > 0 &&
+        kill(state.pid, 0) != 0 && errno == ESRCH) {
+        state.status = JobStatus::Failed;
+        state.error = "the runner stopped without recording a result (killed?)";
+    }
+    return state;
+}
+
+void BatchFolder::write_state(const BatchJob& job, const JobState& state) const {
+    write_text_atomically(state_path(job), state.to_json().dump(2) + "\n");
+}
+
+}  // namespace tdf
