@@ -5,6 +5,5 @@ foreach(_engine local slurm)
   add_test(NAME BatchCli.${_engine}
            COMMAND bash ${PROJECT_SOURCE_DIR}/tests/batch/batch_test.sh ${_engine} $<TARGET_FILE:tdf>
                    ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/test-scratch/batch_cli_${_engine})
-  set_tests_properties(BatchCli.${_engine} PROPERTIES LABELS unit SKIP_RETURN_CODE 77 TIMEOUT 900
-                       RUN_SERIAL TRUE)
+  set_tests_properties(BatchCli.${_engine} PROPERTIES LABELS unit SKIP_RETURN_CODE 77 TIMEOUT 900)
 endforeach()
