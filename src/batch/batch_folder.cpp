@@ -2,6 +2,7 @@
 
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
+#include <tdf/guidance/subprocess.h>
 
 #include <signal.h>
 #include <unistd.h>
@@ -154,12 +155,38 @@ std::string BatchFolder::output_folder(const BatchJob& job) const {
 std::string BatchFolder::state_path(const BatchJob& job) const { return path("state/" + job.name + ".json"); }
 std::string BatchFolder::log_path(const BatchJob& job) const { return path("logs/" + job.name + ".log"); }
 
+namespace {
+
+// Whether Slurm still knows the array task `id` ("123_4"): false only when squeue answered and
+// did not list it (a node failure or SIGKILL left a "running" state behind).
+bool slurm_task_alive(const std::string& id, const std::string& scratch) {
+    try {
+        const std::string out = scratch + "/.squeue." + std::to_string(getpid()) + ".out";
+        const std::string err = scratch + "/.squeue." + std::to_string(getpid()) + ".err";
+        const ProcessOutcome outcome = run_process({"squeue", "-h", "-j", id, "-o", "%T"}, "", 30, out, err);
+        const std::string listed = read_text_file(out), complaint = read_text_file(err);
+        fs::remove(out);
+        fs::remove(err);
+        if (outcome.timed_out) return true;
+        // Slurm answered "Invalid job id" (purged long ago) or listed nothing: gone. Any other
+        // failure (controller unreachable) says nothing about the task.
+        if (outcome.exit_code != 0) return complaint.find("Invalid job id") == std::string::npos;
+        return listed.find_first_not_of(" \n") != std::string::npos;
+    } catch (const Error&) {
+        return true;  // no squeue here: cannot tell
+    }
+}
+
+}  // namespace
+
 JobState BatchFolder::read_state(const BatchJob& job) const {
     const std::string file = state_path(job);
     if (!fs::exists(file)) return {};
     JobState state = JobState::from_json(load_json_file(file));
-    if (state.status == JobStatus::Running && state.host == host_name() && state.pid > 0 &&
-        kill(state.pid, 0) != 0 && errno == ESRCH) {
+    if (state.status != JobStatus::Running) return state;
+    const bool same_host_and_gone =
+        state.host == host_name() && state.pid > 0 && kill(state.pid, 0) != 0 && errno == ESRCH;
+    if (same_host_and_gone || (!state.slurm_job.empty() && !slurm_task_alive(state.slurm_job, path("state")))) {
         state.status = JobStatus::Failed;
         state.error = "the runner stopped without recording a result (killed?)";
     }

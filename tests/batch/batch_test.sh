@@ -65,9 +65,10 @@ wait_for 30 "opt_long running" test "$(state b/state/opt_long.json status)" = ru
 if [ "$engine" = slurm ]; then
   task=$(state b/state/opt_long.json slurm_job)
   [ -n "$task" ] || fail "no Slurm task id in opt_long's state"
-  # SIGTERM to the task runner, as before a preemption. scancel may report "Job can not be altered
-  # now" when the task requeues itself while scancel retries; the requeue below is what counts.
-  scancel --batch --signal=TERM "$task" 2>/dev/null || true
+  # SIGTERM to the task runner, as before a preemption. The signal is delivered at once, but scancel
+  # then keeps retrying for a minute ("Job can not be altered now") while the task requeues
+  # itself: bound it; the requeue below is what counts.
+  timeout 10 scancel --batch --signal=TERM "$task" 2>/dev/null || true
   # The runner requeues the task; Slurm holds a requeued job ~2 minutes (BeginTime): release it now.
   wait_for 120 "opt_long requeued" test "$(squeue -h -j "$task" -o %T 2>/dev/null)" = PENDING
   scontrol update JobId="$task" StartTime=now
