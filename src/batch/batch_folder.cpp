@@ -1,10 +1,8 @@
+#include <signal.h>
 #include <tdf/batch/batch_folder.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/guidance/subprocess.h>
-
-#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -17,11 +15,16 @@ namespace fs = std::filesystem;
 
 const char* job_status_name(JobStatus status) {
     switch (status) {
-        case JobStatus::Pending: return "pending";
-        case JobStatus::Running: return "running";
-        case JobStatus::Done: return "done";
-        case JobStatus::Failed: return "failed";
-        case JobStatus::Interrupted: return "interrupted";
+        case JobStatus::Pending:
+            return "pending";
+        case JobStatus::Running:
+            return "running";
+        case JobStatus::Done:
+            return "done";
+        case JobStatus::Failed:
+            return "failed";
+        case JobStatus::Interrupted:
+            return "interrupted";
     }
     return "pending";
 }
@@ -101,9 +104,12 @@ BatchFolder BatchFolder::create(const std::string& root, const std::vector<Batch
         const std::vector<BatchJob> recorded = read_manifest(manifest);
         const std::string changes = describe_manifest_changes(recorded, jobs);
         if (!changes.empty())
-            throw_error("batch folder '{}' was made from another manifest: {}; run the same manifest to continue it, or "
-                        "use another -o",
-                        root, changes);
+            throw_error(
+                "batch folder '{}' was made from another manifest: {}; run the same manifest to continue it, "
+                "or "
+                "use another -o",
+                root,
+                changes);
         BatchFolder existing = open(root);
         return existing;
     }
@@ -112,12 +118,13 @@ BatchFolder BatchFolder::create(const std::string& root, const std::vector<Batch
     folder.m_jobs = jobs;
     folder.m_tdf = tdf_executable;
     folder.m_working_folder = working_folder;
-    write_text_atomically(folder.path("batch.json"), Json({{"tdf", tdf_executable},
-                                                           {"working_folder", working_folder},
-                                                           {"created", utc_timestamp()},
-                                                           {"jobs", jobs.size()}})
-                                                         .dump(2) +
-                                                         "\n");
+    write_text_atomically(folder.path("batch.json"),
+                          Json({{"tdf", tdf_executable},
+                                {"working_folder", working_folder},
+                                {"created", utc_timestamp()},
+                                {"jobs", jobs.size()}})
+                                  .dump(2) +
+                              "\n");
     // The manifest last: its presence marks a complete batch folder.
     write_text_atomically(manifest, manifest_to_jsonl(jobs));
     return folder;
@@ -129,8 +136,10 @@ BatchFolder BatchFolder::open(const std::string& root) {
     while (folder.m_root.size() > 1 && folder.m_root.back() == '/') folder.m_root.pop_back();
     const std::string manifest = folder.path("manifest.jsonl");
     if (!fs::exists(manifest))
-        throw_error("'{}' is not a batch folder (no manifest.jsonl; make one with `tdf batch run MANIFEST -o {}`)", root,
-                    root);
+        throw_error(
+            "'{}' is not a batch folder (no manifest.jsonl; make one with `tdf batch run MANIFEST -o {}`)",
+            root,
+            root);
     folder.m_jobs = read_manifest(manifest);
     const Json settings = load_json_file(folder.path("batch.json"));
     folder.m_tdf = settings.value("tdf", std::string());
@@ -186,7 +195,8 @@ JobState BatchFolder::read_state(const BatchJob& job) const {
     if (state.status != JobStatus::Running) return state;
     const bool same_host_and_gone =
         state.host == host_name() && state.pid > 0 && kill(state.pid, 0) != 0 && errno == ESRCH;
-    if (same_host_and_gone || (!state.slurm_job.empty() && !slurm_task_alive(state.slurm_job, path("state")))) {
+    if (same_host_and_gone ||
+        (!state.slurm_job.empty() && !slurm_task_alive(state.slurm_job, path("state")))) {
         state.status = JobStatus::Failed;
         state.error = "the runner stopped without recording a result (killed?)";
     }

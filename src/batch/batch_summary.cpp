@@ -1,8 +1,6 @@
-#include <tdf/batch/batch_summary.h>
-
-#include <tdf/core/atomic_file.h>
-
 #include <fmt/format.h>
+#include <tdf/batch/batch_summary.h>
+#include <tdf/core/atomic_file.h>
 
 #include <set>
 
@@ -18,11 +16,21 @@ BatchTotals batch_totals(const BatchFolder& folder) {
     BatchTotals t;
     for (const BatchJob& job : folder.jobs()) {
         switch (folder.read_state(job).status) {
-            case JobStatus::Pending: ++t.pending; break;
-            case JobStatus::Running: ++t.running; break;
-            case JobStatus::Done: ++t.done; break;
-            case JobStatus::Failed: ++t.failed; break;
-            case JobStatus::Interrupted: ++t.interrupted; break;
+            case JobStatus::Pending:
+                ++t.pending;
+                break;
+            case JobStatus::Running:
+                ++t.running;
+                break;
+            case JobStatus::Done:
+                ++t.done;
+                break;
+            case JobStatus::Failed:
+                ++t.failed;
+                break;
+            case JobStatus::Interrupted:
+                ++t.interrupted;
+                break;
         }
     }
     return t;
@@ -91,10 +99,23 @@ void write_batch_summary(const BatchFolder& folder) {
     write_text_atomically(folder.path("summary.json"), summary.dump(2) + "\n");
     std::set<std::string> quality_keys;
     for (const Json& job : summary["jobs"])
-        for (auto it = job["quality"].begin(); it != job["quality"].end(); ++it) quality_keys.insert(it.key());
-    const std::vector<std::string> columns = {"job",      "command", "status",   "exit_code", "error",
-                                              "attempts", "seconds", "seconds_total", "started", "finished",
-                                              "host",     "slurm_job", "output",  "log",       "thumbnail"};
+        for (auto it = job["quality"].begin(); it != job["quality"].end(); ++it)
+            quality_keys.insert(it.key());
+    const std::vector<std::string> columns = {"job",
+                                              "command",
+                                              "status",
+                                              "exit_code",
+                                              "error",
+                                              "attempts",
+                                              "seconds",
+                                              "seconds_total",
+                                              "started",
+                                              "finished",
+                                              "host",
+                                              "slurm_job",
+                                              "output",
+                                              "log",
+                                              "thumbnail"};
     std::string csv;
     for (const std::string& c : columns) csv += (csv.empty() ? "" : ",") + c;
     for (const std::string& k : quality_keys) csv += ",quality." + k;
@@ -113,21 +134,36 @@ std::string batch_status_table(const BatchFolder& folder) {
     std::string out;
     std::size_t width = 4;
     for (const BatchJob& job : folder.jobs()) width = std::max(width, job.name.size());
-    out += fmt::format("{:<{}}  {:<11}  {:>9}  {:>8}  {}\n", "job", width, "status", "seconds", "attempts",
+    out += fmt::format("{:<{}}  {:<11}  {:>9}  {:>8}  {}\n",
+                       "job",
+                       width,
+                       "status",
+                       "seconds",
+                       "attempts",
                        "error / output");
     BatchTotals t;
     for (const BatchJob& job : folder.jobs()) {
         const JobState s = folder.read_state(job);
-        const std::string detail = s.status == JobStatus::Failed || s.status == JobStatus::Interrupted
-                                       ? s.error
-                                       : s.status == JobStatus::Pending ? std::string()
-                                                                        : inside(folder, folder.output_folder(job));
-        out += fmt::format("{:<{}}  {:<11}  {:>9.1f}  {:>8}  {}\n", job.name, width, job_status_name(s.status),
-                           s.seconds_total, s.attempts, detail);
+        const std::string detail =
+            s.status == JobStatus::Failed || s.status == JobStatus::Interrupted ? s.error
+            : s.status == JobStatus::Pending                                    ? std::string()
+                                             : inside(folder, folder.output_folder(job));
+        out += fmt::format("{:<{}}  {:<11}  {:>9.1f}  {:>8}  {}\n",
+                           job.name,
+                           width,
+                           job_status_name(s.status),
+                           s.seconds_total,
+                           s.attempts,
+                           detail);
     }
     t = batch_totals(folder);
-    out += fmt::format("{} jobs: {} done, {} failed, {} interrupted, {} running, {} pending\n", t.total(), t.done,
-                       t.failed, t.interrupted, t.running, t.pending);
+    out += fmt::format("{} jobs: {} done, {} failed, {} interrupted, {} running, {} pending\n",
+                       t.total(),
+                       t.done,
+                       t.failed,
+                       t.interrupted,
+                       t.running,
+                       t.pending);
     return out;
 }
 

@@ -1,5 +1,4 @@
 #include <tdf/batch/grid.h>
-
 #include <tdf/core/error.h>
 
 #include <filesystem>
@@ -29,8 +28,10 @@ std::vector<BatchJob> make_grid(const GridSpec& spec) {
     if (spec.command != "optimize" && spec.command != "render")
         throw_error("tdf batch grid: --command must be optimize or render, not '{}'", spec.command);
     if (spec.scenes.empty()) throw_error("tdf batch grid: give at least one scene or mesh (--scene)");
-    const std::vector<std::string> textures = spec.textures.empty() ? std::vector<std::string>{""} : spec.textures;
-    const std::vector<std::string> sets = spec.override_sets.empty() ? std::vector<std::string>{""} : spec.override_sets;
+    const std::vector<std::string> textures =
+        spec.textures.empty() ? std::vector<std::string>{""} : spec.textures;
+    const std::vector<std::string> sets =
+        spec.override_sets.empty() ? std::vector<std::string>{""} : spec.override_sets;
     std::vector<BatchJob> jobs;
     std::set<std::string> names;
     for (const std::string& item : spec.scenes) {
@@ -43,7 +44,9 @@ std::vector<BatchJob> make_grid(const GridSpec& spec) {
             object = fs::path(path).parent_path().filename().string();
         } else {
             if (spec.base_scene.empty())
-                throw_error("tdf batch grid: '{}' is a mesh: give --base-scene, the scene file it is placed in", item);
+                throw_error(
+                    "tdf batch grid: '{}' is a mesh: give --base-scene, the scene file it is placed in",
+                    item);
             head = {existing_absolute(spec.base_scene, "base scene"), "mesh=" + path};
             object = fs::path(path).stem().string();
         }

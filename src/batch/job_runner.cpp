@@ -1,13 +1,11 @@
+#include <signal.h>
+#include <sys/wait.h>
 #include <tdf/batch/job_runner.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/guidance/subprocess.h>
 #include <tdf/train/run_guard.h>
-
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -36,7 +34,8 @@ std::vector<fs::path> completion_records(const std::string& out) {
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator(out, ec)) {
         const std::string file = entry.path().filename().string();
-        if (file.size() > 14 && file.compare(file.size() - 14, 14, "_complete.json") == 0) records.push_back(entry.path());
+        if (file.size() > 14 && file.compare(file.size() - 14, 14, "_complete.json") == 0)
+            records.push_back(entry.path());
     }
     std::sort(records.begin(), records.end());
     return records;
@@ -75,9 +74,12 @@ std::string relative_to_batch(const BatchFolder& folder, const fs::path& p) {
 }
 
 std::string find_thumbnail(const BatchFolder& folder, const std::string& out) {
-    for (const char* candidate : {"turntable/lambertian_000.png", "turntable/albedo_000.png", "view_000_lambertian.png",
+    for (const char* candidate : {"turntable/lambertian_000.png",
+                                  "turntable/albedo_000.png",
+                                  "view_000_lambertian.png",
                                   "view_000_albedo.png"})
-        if (fs::exists(fs::path(out) / candidate)) return relative_to_batch(folder, fs::path(out) / candidate);
+        if (fs::exists(fs::path(out) / candidate))
+            return relative_to_batch(folder, fs::path(out) / candidate);
     std::vector<fs::path> pngs;
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator(out, ec))
@@ -91,20 +93,21 @@ std::string find_thumbnail(const BatchFolder& folder, const std::string& out) {
 
 std::vector<std::string> job_command_line(const BatchFolder& folder, const BatchJob& job, int threads) {
     const std::string out = folder.output_folder(job);
-    std::vector<std::string> argv = {folder.tdf_executable(), "--threads", std::to_string(std::max(1, threads)),
-                                     job.command};
+    std::vector<std::string> argv = {
+        folder.tdf_executable(), "--threads", std::to_string(std::max(1, threads)), job.command};
     for (std::string a : job.args) {
         for (std::size_t at = a.find("{out}"); at != std::string::npos; at = a.find("{out}", at + out.size()))
             a.replace(at, 5, out);
         argv.push_back(a);
     }
-    if ((job.command == "optimize" || job.command == "render") && !has_argument(job.args, {"-o", "--output"})) {
+    if ((job.command == "optimize" || job.command == "render") &&
+        !has_argument(job.args, {"-o", "--output"})) {
         argv.push_back("-o");
         argv.push_back(out);
     }
     if (job.command == "compare" && !has_argument(job.args, {"--json"})) argv.push_back("--json");
-    if (job.command == "optimize" && !has_argument(job.args, {"--resume"}) && fs::exists(out + "/checkpoint.bin") &&
-        completion_records(out).empty())
+    if (job.command == "optimize" && !has_argument(job.args, {"--resume"}) &&
+        fs::exists(out + "/checkpoint.bin") && completion_records(out).empty())
         argv.push_back("--resume");
     return argv;
 }
@@ -130,7 +133,9 @@ void collect_job_result(const BatchFolder& folder, const BatchJob& job, int exit
     } else {
         state.status = JobStatus::Failed;
         state.error = error_line(log_tail);
-        if (signal != 0) state.error = "killed by " + signal_name(signal) + (state.error.empty() ? "" : ": " + state.error);
+        if (signal != 0)
+            state.error =
+                "killed by " + signal_name(signal) + (state.error.empty() ? "" : ": " + state.error);
         if (state.error.empty()) state.error = "exit code " + std::to_string(exit_code);
     }
     // Quality numbers, whatever the status (a failed compare still measured its images).
@@ -180,7 +185,8 @@ void requeue_this_task() {
         if (outcome.exit_code == 0)
             log_info("requeued Slurm task {}: it continues from its checkpoint when it runs again", id);
         else
-            log_warning("scontrol requeue {} failed (exit {}); Slurm may requeue it itself (preemption)", id,
+            log_warning("scontrol requeue {} failed (exit {}); Slurm may requeue it itself (preemption)",
+                        id,
                         outcome.exit_code);
     } catch (const Error& e) {
         log_warning("cannot requeue Slurm task {}: {}", id, e.what());
@@ -223,8 +229,9 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
         ensure_folder(fs::path(log).parent_path().string());
         {
             std::ofstream header(log, std::ios::app);
-            header << "=== tdf batch: job " << job.name << ", attempt " << state.attempts << " on " << state.host
-                   << " at " << state.started << (state.slurm_job.empty() ? "" : ", Slurm " + state.slurm_job) << "\n"
+            header << "=== tdf batch: job " << job.name << ", attempt " << state.attempts << " on "
+                   << state.host << " at " << state.started
+                   << (state.slurm_job.empty() ? "" : ", Slurm " + state.slurm_job) << "\n"
                    << "=== " << state.command_line << "\n";
         }
         std::error_code ec;
@@ -232,11 +239,14 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
         folder.write_state(job, state);
         const std::string stdout_path = job.command == "compare" ? state.output + "/compare.json" : log;
         try {
-            const pid_t pid = spawn_process(argv, folder.working_folder(), stdout_path, log, job.command != "compare");
+            const pid_t pid =
+                spawn_process(argv, folder.working_folder(), stdout_path, log, job.command != "compare");
             running[pid] = RunningJob{index, state, ec ? 0 : offset, std::chrono::steady_clock::now()};
-            log_info("started {} ({} of {}): {}", job.name, outcome.done + outcome.failed + outcome.interrupted +
-                                                                   int(running.size()),
-                     plan.indices.size(), state.command_line);
+            log_info("started {} ({} of {}): {}",
+                     job.name,
+                     outcome.done + outcome.failed + outcome.interrupted + int(running.size()),
+                     plan.indices.size(),
+                     state.command_line);
         } catch (const Error& e) {
             state.status = JobStatus::Failed;
             state.error = e.what();
@@ -259,7 +269,8 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
         r.state.seconds_total += r.state.seconds;
         r.state.finished = utc_timestamp();
         r.state.pid = 0;
-        collect_job_result(folder, job, exit_code, signal, read_from(folder.log_path(job), r.log_offset), r.state);
+        collect_job_result(
+            folder, job, exit_code, signal, read_from(folder.log_path(job), r.log_offset), r.state);
         folder.write_state(job, r.state);
         switch (r.state.status) {
             case JobStatus::Done:
@@ -290,7 +301,8 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
             while ((pid = waitpid(-1, &status, WNOHANG)) > 0) finish_job(pid, status);
         } else {
             if (!outcome.stopped)
-                log_info("{} received: passing SIGTERM to {} running job(s) and starting no new one", signal_name(s),
+                log_info("{} received: passing SIGTERM to {} running job(s) and starting no new one",
+                         signal_name(s),
                          running.size());
             outcome.stopped = true;
             for (const auto& [pid, r] : running) kill(-pid, SIGTERM);

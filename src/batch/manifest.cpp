@@ -1,5 +1,4 @@
 #include <tdf/batch/manifest.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 
@@ -15,11 +14,14 @@ void validate_job(const BatchJob& job, const std::string& where) {
     if (job.name.empty() || job.name.size() > 100 || job.name.front() == '.' ||
         job.name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-") !=
             std::string::npos)
-        throw_error("{}: job name '{}' must be 1-100 characters of A-Z a-z 0-9 . _ - and not start with '.'", where,
+        throw_error("{}: job name '{}' must be 1-100 characters of A-Z a-z 0-9 . _ - and not start with '.'",
+                    where,
                     job.name);
     const auto& commands = batch_commands();
     if (std::find(commands.begin(), commands.end(), job.command) == commands.end())
-        throw_error("{}: job '{}': unknown command '{}' (optimize, render, compare, tactile or atlas)", where, job.name,
+        throw_error("{}: job '{}': unknown command '{}' (optimize, render, compare, tactile or atlas)",
+                    where,
+                    job.name,
                     job.command);
     if (job.args.empty()) throw_error("{}: job '{}' has no arguments", where, job.name);
 }
@@ -42,7 +44,8 @@ std::string join_arguments(const std::vector<std::string>& args) {
 }
 
 // RFC 4180 records; `line` of each record's start for messages.
-std::vector<std::pair<int, std::vector<std::string>>> parse_csv(const std::string& text, const std::string& source) {
+std::vector<std::pair<int, std::vector<std::string>>> parse_csv(const std::string& text,
+                                                                const std::string& source) {
     std::vector<std::pair<int, std::vector<std::string>>> records;
     std::vector<std::string> fields;
     std::string field;
@@ -103,8 +106,10 @@ std::vector<BatchJob> parse_csv_manifest(const std::string& text, const std::str
         name.erase(0, name.find_first_not_of(" \t"));
         name.erase(name.find_last_not_of(" \t") + 1);
         if (name != "name" && name != "command" && name != "args" && name != "output")
-            throw_error("{}:1: unknown column '{}' (the header names name, command, args and optionally output)",
-                        source, name);
+            throw_error(
+                "{}:1: unknown column '{}' (the header names name, command, args and optionally output)",
+                source,
+                name);
         column[name] = k;
     }
     for (const char* required : {"name", "command", "args"})
@@ -208,7 +213,8 @@ std::vector<std::string> split_arguments(const std::string& text, const std::str
         } else if (c == '"') {
             std::size_t j = i + 1;
             for (; j < text.size() && text[j] != '"'; ++j) {
-                if (text[j] == '\\' && j + 1 < text.size() && (text[j + 1] == '"' || text[j + 1] == '\\')) ++j;
+                if (text[j] == '\\' && j + 1 < text.size() && (text[j + 1] == '"' || text[j + 1] == '\\'))
+                    ++j;
                 current += text[j];
             }
             if (j >= text.size()) throw_error("{}: unclosed \" in arguments: {}", where, text);
@@ -226,8 +232,8 @@ std::vector<std::string> split_arguments(const std::string& text, const std::str
 std::vector<BatchJob> parse_manifest(const std::string& text, const std::string& source) {
     const auto first = text.find_first_not_of(" \t\r\n");
     if (first == std::string::npos) throw_error("{}: the manifest is empty", source);
-    std::vector<BatchJob> jobs =
-        text[first] == '{' || text[first] == '#' ? parse_jsonl_manifest(text, source) : parse_csv_manifest(text, source);
+    std::vector<BatchJob> jobs = text[first] == '{' || text[first] == '#' ? parse_jsonl_manifest(text, source)
+                                                                          : parse_csv_manifest(text, source);
     if (jobs.empty()) throw_error("{}: the manifest lists no jobs", source);
     std::set<std::string> names;
     for (const BatchJob& job : jobs)
@@ -235,7 +241,9 @@ std::vector<BatchJob> parse_manifest(const std::string& text, const std::string&
     return jobs;
 }
 
-std::vector<BatchJob> read_manifest(const std::string& path) { return parse_manifest(read_text_file(path), path); }
+std::vector<BatchJob> read_manifest(const std::string& path) {
+    return parse_manifest(read_text_file(path), path);
+}
 
 std::string manifest_to_jsonl(const std::vector<BatchJob>& jobs) {
     std::string out;
@@ -252,12 +260,13 @@ std::string manifest_to_csv(const std::vector<BatchJob>& jobs) {
     };
     std::string out = "name,command,args,output\n";
     for (const BatchJob& job : jobs)
-        out += csv_field(job.name) + "," + csv_field(job.command) + "," + csv_field(join_arguments(job.args)) + "," +
-               csv_field(job.output) + "\n";
+        out += csv_field(job.name) + "," + csv_field(job.command) + "," +
+               csv_field(join_arguments(job.args)) + "," + csv_field(job.output) + "\n";
     return out;
 }
 
-std::string describe_manifest_changes(const std::vector<BatchJob>& recorded, const std::vector<BatchJob>& current) {
+std::string describe_manifest_changes(const std::vector<BatchJob>& recorded,
+                                      const std::vector<BatchJob>& current) {
     std::vector<std::string> changes;
     std::map<std::string, const BatchJob*> before, after;
     for (const BatchJob& j : recorded) before[j.name] = &j;
@@ -269,7 +278,8 @@ std::string describe_manifest_changes(const std::vector<BatchJob>& recorded, con
             continue;
         }
         const BatchJob& now = *it->second;
-        if (now.command != j.command) changes.push_back("job '" + j.name + "': command " + j.command + " -> " + now.command);
+        if (now.command != j.command)
+            changes.push_back("job '" + j.name + "': command " + j.command + " -> " + now.command);
         if (now.args != j.args)
             changes.push_back("job '" + j.name + "': args differ (was: " + join_arguments(j.args) +
                               "; now: " + join_arguments(now.args) + ")");

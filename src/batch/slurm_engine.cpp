@@ -1,11 +1,9 @@
+#include <sys/stat.h>
 #include <tdf/batch/slurm_engine.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/guidance/subprocess.h>
-
-#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -30,8 +28,8 @@ std::string first_line(std::string text) {
 }
 
 // Runs sbatch; returns the job id it printed (--parsable: "id[;cluster]").
-std::string sbatch(const SlurmOptions& options, const std::vector<std::string>& arguments, const std::string& folder,
-                   int* exit_code_when_waiting) {
+std::string sbatch(const SlurmOptions& options, const std::vector<std::string>& arguments,
+                   const std::string& folder, int* exit_code_when_waiting) {
     std::vector<std::string> argv = {options.sbatch, "--parsable"};
     argv.insert(argv.end(), arguments.begin(), arguments.end());
     const std::string out = folder + "/sbatch.out", err = folder + "/sbatch.err";
@@ -41,7 +39,8 @@ std::string sbatch(const SlurmOptions& options, const std::vector<std::string>& 
     const std::string printed = first_line(read_text_file(out));
     if (exit_code_when_waiting) *exit_code_when_waiting = outcome.exit_code;
     if (printed.empty() || (outcome.exit_code != 0 && !exit_code_when_waiting))
-        throw_error("sbatch failed (exit {}): {}", outcome.exit_code,
+        throw_error("sbatch failed (exit {}): {}",
+                    outcome.exit_code,
                     first_line(file_tail(err, 3)).empty() ? format_command(argv) : file_tail(err, 3));
     return printed.substr(0, printed.find(';'));
 }
@@ -59,7 +58,8 @@ std::string slurm_array_spec(const std::vector<std::size_t>& indices, int max_pa
         std::size_t end = k;
         while (end + 1 < indices.size() && indices[end + 1] == indices[end] + 1) ++end;
         if (!spec.empty()) spec += ",";
-        spec += end == k ? std::to_string(indices[k]) : std::to_string(indices[k]) + "-" + std::to_string(indices[end]);
+        spec += end == k ? std::to_string(indices[k])
+                         : std::to_string(indices[k]) + "-" + std::to_string(indices[end]);
         k = end + 1;
     }
     if (max_parallel > 0) spec += "%" + std::to_string(max_parallel);
@@ -70,7 +70,8 @@ std::string slurm_array_script(const BatchFolder& folder, const std::vector<std:
                                const SlurmOptions& options) {
     const std::string name = "tdf-" + fs::path(folder.root()).filename().string();
     std::string s = "#!/bin/bash\n";
-    s += "# tdf batch: one array task per job of " + folder.root() + "/manifest.jsonl (README \"tdf batch\").\n";
+    s += "# tdf batch: one array task per job of " + folder.root() +
+         "/manifest.jsonl (README \"tdf batch\").\n";
     s += "#SBATCH --job-name=" + name + "\n";
     s += "#SBATCH --array=" + slurm_array_spec(indices, options.max_parallel) + "\n";
     s += "#SBATCH --cpus-per-task=" + std::to_string(options.cpus_per_task) + "\n";
@@ -97,21 +98,28 @@ SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::s
     const std::string array_script = dir + "/array.sh";
     write_script(array_script, slurm_array_script(folder, indices, options));
     const std::string summary_script = dir + "/summary.sh";
-    write_script(summary_script, "#!/bin/bash\n# tdf batch: the summary once every array task has ended.\nexec " +
-                                     shell_quote(folder.tdf_executable()) + " batch status " +
-                                     shell_quote(folder.root()) + " --summary\n");
+    write_script(summary_script,
+                 "#!/bin/bash\n# tdf batch: the summary once every array task has ended.\nexec " +
+                     shell_quote(folder.tdf_executable()) + " batch status " + shell_quote(folder.root()) +
+                     " --summary\n");
 
     std::vector<std::string> array_args = options.sbatch_options;
     array_args.push_back(array_script);
     submission.array_job = sbatch(options, array_args, dir, nullptr);
-    log_info("submitted Slurm array job {} ({} tasks, --array={})", submission.array_job, indices.size(),
+    log_info("submitted Slurm array job {} ({} tasks, --array={})",
+             submission.array_job,
+             indices.size(),
              submission.array_spec);
 
     std::vector<std::string> summary_args = options.sbatch_options;
-    for (const std::string& a : std::vector<std::string>{
-             "--job-name=tdf-summary", "--dependency=afterany:" + submission.array_job, "--kill-on-invalid-dep=no",
-             "--cpus-per-task=1", "--ntasks=1", "--output=" + folder.root() + "/logs/slurm-summary-%j.out",
-             "--chdir=" + folder.root()})
+    for (const std::string& a :
+         std::vector<std::string>{"--job-name=tdf-summary",
+                                  "--dependency=afterany:" + submission.array_job,
+                                  "--kill-on-invalid-dep=no",
+                                  "--cpus-per-task=1",
+                                  "--ntasks=1",
+                                  "--output=" + folder.root() + "/logs/slurm-summary-%j.out",
+                                  "--chdir=" + folder.root()})
         summary_args.push_back(a);
     if (options.wait) summary_args.push_back("--wait");
     summary_args.push_back(summary_script);
@@ -126,7 +134,8 @@ SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::s
                << "\n";
     }
     if (options.wait) log_info("waiting for the array and the summary (sbatch --wait)");
-    submission.summary_job = sbatch(options, summary_args, dir, options.wait ? &submission.summary_exit_code : nullptr);
+    submission.summary_job =
+        sbatch(options, summary_args, dir, options.wait ? &submission.summary_exit_code : nullptr);
     log_info("summary job {} runs after the array (afterany)", submission.summary_job);
     return submission;
 }

@@ -1,8 +1,6 @@
-#include <tdf/core/hash.h>
-
-#include <tdf/core/error.h>
-
 #include <fmt/format.h>
+#include <tdf/core/error.h>
+#include <tdf/core/hash.h>
 
 #include <cerrno>
 #include <cstring>

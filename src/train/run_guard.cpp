@@ -1,14 +1,12 @@
-#include <tdf/train/run_guard.h>
-
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/hash.h>
 #include <tdf/core/log.h>
 #include <tdf/optim/checkpoint.h>
 #include <tdf/scene/scene_file.h>
-
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/file.h>
+#include <tdf/train/run_guard.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -31,9 +29,10 @@ void validate_output_target(const std::string& output_dir, const std::string& na
     if (output_dir.empty())
         throw_error("-o/--output is empty: give an output folder (use '.' for the current folder)");
     if (name.empty() || name == "." || name == ".." || name.find_first_of("/\\") != std::string::npos)
-        throw_error("--name '{}' is not a plain file name prefix: it must be non-empty, not '.' or '..', and contain "
-                    "no '/' (files must stay inside the output folder)",
-                    name);
+        throw_error(
+            "--name '{}' is not a plain file name prefix: it must be non-empty, not '.' or '..', and contain "
+            "no '/' (files must stay inside the output folder)",
+            name);
 }
 
 // ---- stop signals -------------------------------------------------------------------------
@@ -60,10 +59,12 @@ extern "C" void on_stop_signal(int signal) {
     }
     g_stop_signal = signal;
     // Only async-signal-safe calls here: fixed texts through write(2).
-    write_stderr(signal == SIGTERM  ? "tdf: SIGTERM received: stopping at the next iteration boundary with a checkpoint\n"
-                 : signal == SIGINT ? "tdf: SIGINT received: stopping at the next iteration boundary with a checkpoint "
-                                      "(Ctrl-C again to kill)\n"
-                                    : "tdf: SIGUSR1 received: stopping at the next iteration boundary with a checkpoint\n");
+    write_stderr(signal == SIGTERM
+                     ? "tdf: SIGTERM received: stopping at the next iteration boundary with a checkpoint\n"
+                 : signal == SIGINT
+                     ? "tdf: SIGINT received: stopping at the next iteration boundary with a checkpoint "
+                       "(Ctrl-C again to kill)\n"
+                     : "tdf: SIGUSR1 received: stopping at the next iteration boundary with a checkpoint\n");
 }
 
 }  // namespace
@@ -86,18 +87,27 @@ void clear_stop_request() { g_stop_signal = 0; }
 
 std::string signal_name(int signal) {
     switch (signal) {
-        case SIGTERM: return "SIGTERM";
-        case SIGINT: return "SIGINT";
-        case SIGUSR1: return "SIGUSR1";
-        case SIGKILL: return "SIGKILL";
-        default: return fmt::format("signal {}", signal);
+        case SIGTERM:
+            return "SIGTERM";
+        case SIGINT:
+            return "SIGINT";
+        case SIGUSR1:
+            return "SIGUSR1";
+        case SIGKILL:
+            return "SIGKILL";
+        default:
+            return fmt::format("signal {}", signal);
     }
 }
 
 void throw_interrupted(int iteration, const std::string& checkpoint_path) {
-    throw RunInterrupted(fmt::format("interrupted by {} after iteration {}: checkpoint written to '{}'; continue with "
-                                     "--resume (exit code {})",
-                                     signal_name(stop_signal()), iteration, checkpoint_path, kExitInterrupted));
+    throw RunInterrupted(
+        fmt::format("interrupted by {} after iteration {}: checkpoint written to '{}'; continue with "
+                    "--resume (exit code {})",
+                    signal_name(stop_signal()),
+                    iteration,
+                    checkpoint_path,
+                    kExitInterrupted));
 }
 
 // ---- output folder lock -------------------------------------------------------------------
@@ -116,7 +126,8 @@ OutputFolderLock::OutputFolderLock(const std::string& folder, const std::string&
             throw_error("cannot lock output folder '{}': {}", folder, std::strerror(error));
         std::string holder = read_text_file(path);
         while (!holder.empty() && (holder.back() == '\n' || holder.back() == '\r')) holder.pop_back();
-        throw_error("output folder '{}' is in use by another tdf run ({}); wait for it or choose another -o", folder,
+        throw_error("output folder '{}' is in use by another tdf run ({}); wait for it or choose another -o",
+                    folder,
                     holder.empty() ? "holder unknown" : holder);
     }
     char host[256] = {};
@@ -149,7 +160,8 @@ std::vector<std::string> remove_stale_temporaries(const std::string& folder) {
     std::vector<std::string> removed;
     std::error_code ec;
     if (!fs::is_directory(folder, ec)) return removed;
-    for (auto it = fs::recursive_directory_iterator(folder, ec); !ec && it != fs::recursive_directory_iterator();
+    for (auto it = fs::recursive_directory_iterator(folder, ec);
+         !ec && it != fs::recursive_directory_iterator();
          it.increment(ec)) {
         if (!it->is_regular_file(ec) || !is_atomic_temporary(it->path().filename().string())) continue;
         std::error_code remove_error;
@@ -210,7 +222,8 @@ void gltf_sidecars(const fs::path& gltf, std::set<std::string>& out) {
 
 }  // namespace
 
-std::vector<std::string> scene_input_files(const SceneDescription& scene, const std::vector<std::string>& extra) {
+std::vector<std::string> scene_input_files(const SceneDescription& scene,
+                                           const std::vector<std::string>& extra) {
     std::set<std::string> files(extra.begin(), extra.end());
     // The scene file and its parents (a parent may change what the scene means).
     fs::path scene_file = scene.path;
@@ -291,7 +304,8 @@ std::string config_differences(const Json& recorded, const Json& current) {
 
 }  // namespace
 
-void verify_resume(const std::string& checkpoint_path, const std::string& resolved_config, const Json& inputs) {
+void verify_resume(const std::string& checkpoint_path, const std::string& resolved_config,
+                   const Json& inputs) {
     if (!fs::exists(checkpoint_path))
         throw_error("--resume: no checkpoint at '{}' (start without --resume)", checkpoint_path);
     const FieldCheckpoint checkpoint = load_field_checkpoint(checkpoint_path);
@@ -300,10 +314,12 @@ void verify_resume(const std::string& checkpoint_path, const std::string& resolv
         throw_error("--resume: '{}' records no configuration", checkpoint_path);
     const std::string recorded_config = extra["config"].get<std::string>();
     if (recorded_config != resolved_config)
-        throw_error("--resume: '{}' was written with a different scene or configuration (differs at: {}); start "
-                    "without --resume or restore the old settings",
-                    checkpoint_path,
-                    config_differences(parse_json(recorded_config, checkpoint_path), parse_json(resolved_config, "")));
+        throw_error(
+            "--resume: '{}' was written with a different scene or configuration (differs at: {}); start "
+            "without --resume or restore the old settings",
+            checkpoint_path,
+            config_differences(parse_json(recorded_config, checkpoint_path),
+                               parse_json(resolved_config, "")));
     if (!extra.contains("inputs")) {
         log_warning("--resume: '{}' records no input hashes (older tdf); the input files are not verified",
                     checkpoint_path);
@@ -311,8 +327,11 @@ void verify_resume(const std::string& checkpoint_path, const std::string& resolv
     }
     const std::string changes = describe_input_changes(extra["inputs"], inputs);
     if (!changes.empty())
-        throw_error("--resume: input files changed since '{}' was written: {}; start without --resume or restore them",
-                    checkpoint_path, changes);
+        throw_error(
+            "--resume: input files changed since '{}' was written: {}; start without --resume or restore "
+            "them",
+            checkpoint_path,
+            changes);
 }
 
 // ---- completion record --------------------------------------------------------------------
@@ -347,7 +366,9 @@ RunGuard::RunGuard(const std::string& output_dir, const std::string& name, const
       m_start(std::chrono::steady_clock::now()) {
     const std::vector<std::string> removed = remove_stale_temporaries(m_folder);
     if (!removed.empty())
-        log_info("removed {} temporary file(s) an interrupted run left in {} (e.g. {})", removed.size(), m_folder,
+        log_info("removed {} temporary file(s) an interrupted run left in {} (e.g. {})",
+                 removed.size(),
+                 m_folder,
                  fs::path(removed.front()).filename().string());
     std::error_code ignored;
     fs::remove(completion_record_path(m_folder, m_name), ignored);
@@ -364,8 +385,8 @@ void RunGuard::complete(const Json& extra) const {
     std::vector<fs::path> paths;
     for (const auto& entry : fs::recursive_directory_iterator(m_folder)) {
         const std::string file_name = entry.path().filename().string();
-        if (!entry.is_regular_file() || file_name == kLockFileName || entry.path().filename() == record_name ||
-            is_atomic_temporary(file_name))
+        if (!entry.is_regular_file() || file_name == kLockFileName ||
+            entry.path().filename() == record_name || is_atomic_temporary(file_name))
             continue;
         paths.push_back(entry.path());
     }

@@ -1,6 +1,8 @@
 // The batch folder, the local engine (with a stand-in for the tdf executable, so that these
 // tests stay fast), the summary and the Slurm array script. The real tdf under the local engine
 // and under a real Slurm is tested by tests/batch/batch_test.sh (ctest BatchCli.*).
+#include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <tdf/batch/batch_folder.h>
 #include <tdf/batch/batch_summary.h>
 #include <tdf/batch/job_runner.h>
@@ -8,13 +10,9 @@
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
-#include <sys/stat.h>
-
 #include <filesystem>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 namespace fs = std::filesystem;
@@ -32,20 +30,21 @@ std::string fresh(const std::string& name) {
 // error line and exits 1, "compare" prints a report; every job writes its thread count.
 std::string fake_tdf(const std::string& folder) {
     const std::string path = folder + "/fake_tdf.sh";
-    write_text_atomically(path,
-                          "#!/bin/sh\n"
-                          "threads=$2; cmd=$3; shift 3\n"
-                          "echo \"progress line\" >&2\n"
-                          "case \"$cmd\" in\n"
-                          "  compare) echo '{\"result\": \"pass\", \"overall\": {\"psnr\": 41.5, \"max_error\": 0.01}}';"
-                          " exit 0;;\n"
-                          "esac\n"
-                          "case \"$1\" in\n"
-                          "  fail) echo \"tdf $cmd: scene.json: unknown key 'colour'\" >&2; echo 'trailing' >&2; exit 1;;\n"
-                          "  ok) out=$3; mkdir -p \"$out\"; echo $threads > \"$out/threads.txt\"; : > \"$out/a.png\";"
-                          " exit 0;;\n"
-                          "esac\n"
-                          "exit 3\n");
+    write_text_atomically(
+        path,
+        "#!/bin/sh\n"
+        "threads=$2; cmd=$3; shift 3\n"
+        "echo \"progress line\" >&2\n"
+        "case \"$cmd\" in\n"
+        "  compare) echo '{\"result\": \"pass\", \"overall\": {\"psnr\": 41.5, \"max_error\": 0.01}}';"
+        " exit 0;;\n"
+        "esac\n"
+        "case \"$1\" in\n"
+        "  fail) echo \"tdf $cmd: scene.json: unknown key 'colour'\" >&2; echo 'trailing' >&2; exit 1;;\n"
+        "  ok) out=$3; mkdir -p \"$out\"; echo $threads > \"$out/threads.txt\"; : > \"$out/a.png\";"
+        " exit 0;;\n"
+        "esac\n"
+        "exit 3\n");
     chmod(path.c_str(), 0755);
     return path;
 }
@@ -63,7 +62,8 @@ TEST(BatchEngine, ChangedManifestIsRefusedNamingTheChange) {
         BatchFolder::create(root, changed, "/bin/true", root);
         FAIL() << "a changed manifest was accepted";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("was made from another manifest: job 'a': args differ"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find("was made from another manifest: job 'a': args differ"),
+                  std::string::npos)
             << e.what();
     }
 }
@@ -79,7 +79,8 @@ TEST(BatchEngine, CommandLineAddsOutputJsonAndResume) {
     const BatchFolder folder = BatchFolder::create(root, jobs, "/usr/bin/tdf", root);
     const std::string out = root + "/jobs/o";
     EXPECT_EQ(job_command_line(folder, jobs[0], 2),
-              (std::vector<std::string>{"/usr/bin/tdf", "--threads", "2", "optimize", "s.json", "seed=1", "-o", out}));
+              (std::vector<std::string>{
+                  "/usr/bin/tdf", "--threads", "2", "optimize", "s.json", "seed=1", "-o", out}));
     EXPECT_EQ(job_command_line(folder, jobs[1], 1).back(), root + "/jobs/r/views");
     EXPECT_EQ(job_command_line(folder, jobs[2], 1).back(), "--json");
     // An interrupted optimize (checkpoint, no completion record) continues with --resume.
@@ -134,12 +135,14 @@ TEST(BatchEngine, LocalEngineRunsEveryJobAndAFailureDoesNotStopTheOthers) {
     EXPECT_EQ(summary["jobs"][0]["output"], "jobs/a");
     EXPECT_EQ(summary["jobs"][0]["log"], "logs/a.log");
     const std::string csv = read_text_file(root + "/summary.csv");
-    EXPECT_EQ(csv.substr(0, csv.find('\n')),
-              "job,command,status,exit_code,error,attempts,seconds,seconds_total,started,finished,host,slurm_job,"
-              "output,log,thumbnail,quality.max_error,quality.psnr,quality.result");
+    EXPECT_EQ(
+        csv.substr(0, csv.find('\n')),
+        "job,command,status,exit_code,error,attempts,seconds,seconds_total,started,finished,host,slurm_job,"
+        "output,log,thumbnail,quality.max_error,quality.psnr,quality.result");
     EXPECT_NE(csv.find("\ncmp,compare,done,0,"), std::string::npos) << csv;
-    EXPECT_NE(batch_status_table(folder).find("5 jobs: 4 done, 1 failed, 0 interrupted, 0 running, 0 pending"),
-              std::string::npos);
+    EXPECT_NE(
+        batch_status_table(folder).find("5 jobs: 4 done, 1 failed, 0 interrupted, 0 running, 0 pending"),
+        std::string::npos);
 
     // The failed job again: it counts a second attempt, and its log keeps both.
     plan.indices = {1};
@@ -162,9 +165,12 @@ TEST(BatchEngine, SlurmArraySpecAndScript) {
     options.signal_seconds = 300;
     const std::string script = slurm_array_script(folder, {0, 1}, options);
     for (const std::string& line :
-         {std::string("#SBATCH --array=0-1%4\n"), std::string("#SBATCH --cpus-per-task=8\n"),
-          std::string("#SBATCH --requeue\n"), std::string("#SBATCH --signal=B:USR1@300\n"),
-          "#SBATCH --output=" + root + "/logs/slurm-%A_%a.out\n", std::string("#SBATCH --chdir=/home/me/project\n"),
+         {std::string("#SBATCH --array=0-1%4\n"),
+          std::string("#SBATCH --cpus-per-task=8\n"),
+          std::string("#SBATCH --requeue\n"),
+          std::string("#SBATCH --signal=B:USR1@300\n"),
+          "#SBATCH --output=" + root + "/logs/slurm-%A_%a.out\n",
+          std::string("#SBATCH --chdir=/home/me/project\n"),
           "exec '/opt/tdf/bin/tdf' batch task '" + root + "' \"$SLURM_ARRAY_TASK_ID\"\n"})
         EXPECT_NE(script.find(line), std::string::npos) << line << "\n" << script;
 }

@@ -1,14 +1,13 @@
 // Batch manifests (CSV and JSON lines), change detection, and `tdf batch grid`.
+#include <gtest/gtest.h>
 #include <tdf/batch/grid.h>
 #include <tdf/batch/manifest.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <filesystem>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 namespace fs = std::filesystem;
@@ -28,9 +27,11 @@ std::string error_of(F&& f) {
 TEST(BatchManifest, JsonLinesWithArrayAndStringArguments) {
     const auto jobs = parse_manifest(
         "# a comment\n"
-        "{\"name\": \"a\", \"command\": \"optimize\", \"args\": [\"s.json\", \"views.orbit=[]\"], \"output\": \"x/a\"}\n"
+        "{\"name\": \"a\", \"command\": \"optimize\", \"args\": [\"s.json\", \"views.orbit=[]\"], "
+        "\"output\": \"x/a\"}\n"
         "\n"
-        "{\"name\": \"b-2.v\", \"command\": \"render\", \"args\": \"s.json 'passes=[\\\"albedo\\\"]' --png\"}\n",
+        "{\"name\": \"b-2.v\", \"command\": \"render\", \"args\": \"s.json 'passes=[\\\"albedo\\\"]' "
+        "--png\"}\n",
         "m.jsonl");
     ASSERT_EQ(jobs.size(), 2u);
     EXPECT_EQ(jobs[0].args, (std::vector<std::string>{"s.json", "views.orbit=[]"}));
@@ -55,28 +56,37 @@ TEST(BatchManifest, CsvWithQuotedFieldsInAnyColumnOrder) {
 }
 
 TEST(BatchManifest, BadManifestsAreOneLineErrorsWithTheLine) {
-    EXPECT_NE(error_of([] { parse_manifest("", "m.csv"); }).find("m.csv: the manifest is empty"), std::string::npos);
+    EXPECT_NE(error_of([] { parse_manifest("", "m.csv"); }).find("m.csv: the manifest is empty"),
+              std::string::npos);
     EXPECT_NE(error_of([] { parse_manifest("name,command\na,render\n", "m.csv"); }).find("no 'args' column"),
               std::string::npos);
-    EXPECT_NE(error_of([] { parse_manifest("name,command,args\na,paint,x\n", "m.csv"); })
-                  .find("m.csv:2: job 'a': unknown command 'paint'"),
+    EXPECT_NE(error_of([] {
+                  parse_manifest("name,command,args\na,paint,x\n", "m.csv");
+              }).find("m.csv:2: job 'a': unknown command 'paint'"),
               std::string::npos);
-    EXPECT_NE(error_of([] { parse_manifest("name,command,args\n../a,render,x\n", "m.csv"); }).find("job name '../a'"),
+    EXPECT_NE(error_of([] {
+                  parse_manifest("name,command,args\n../a,render,x\n", "m.csv");
+              }).find("job name '../a'"),
               std::string::npos);
-    EXPECT_NE(error_of([] { parse_manifest("name,command,args\na,render,x\na,render,y\n", "m.csv"); })
-                  .find("'a' appears twice"),
+    EXPECT_NE(error_of([] {
+                  parse_manifest("name,command,args\na,render,x\na,render,y\n", "m.csv");
+              }).find("'a' appears twice"),
               std::string::npos);
-    EXPECT_NE(error_of([] { parse_manifest("{\"name\":\"a\",\"command\":\"render\"}\n", "m.jsonl"); })
-                  .find("m.jsonl:1: missing \"args\""),
+    EXPECT_NE(error_of([] {
+                  parse_manifest("{\"name\":\"a\",\"command\":\"render\"}\n", "m.jsonl");
+              }).find("m.jsonl:1: missing \"args\""),
               std::string::npos);
-    EXPECT_NE(error_of([] { parse_manifest("{\"name\":\"a\",\"command\":\"render\",\"args\":\"x\",\"gpu\":1}\n", "m.jsonl"); })
-                  .find("unknown key 'gpu'"),
+    EXPECT_NE(error_of([] {
+                  parse_manifest("{\"name\":\"a\",\"command\":\"render\",\"args\":\"x\",\"gpu\":1}\n",
+                                 "m.jsonl");
+              }).find("unknown key 'gpu'"),
               std::string::npos);
     EXPECT_NE(error_of([] { split_arguments("a 'b", "here"); }).find("here: unclosed '"), std::string::npos);
 }
 
 TEST(BatchManifest, ChangesAreNamed) {
-    const auto before = parse_manifest("name,command,args\na,render,s.json\nb,render,s.json seed=1\n", "m.csv");
+    const auto before =
+        parse_manifest("name,command,args\na,render,s.json\nb,render,s.json seed=1\n", "m.csv");
     EXPECT_EQ(describe_manifest_changes(before, before), "");
     auto after = before;
     after[1].args.back() = "seed=2";
@@ -85,7 +95,9 @@ TEST(BatchManifest, ChangesAreNamed) {
     after.erase(after.begin());
     const std::string changes = describe_manifest_changes(before, after);
     EXPECT_NE(changes.find("job 'a' removed"), std::string::npos) << changes;
-    EXPECT_NE(changes.find("job 'b': args differ (was: s.json seed=1; now: s.json seed=2)"), std::string::npos) << changes;
+    EXPECT_NE(changes.find("job 'b': args differ (was: s.json seed=1; now: s.json seed=2)"),
+              std::string::npos)
+        << changes;
     EXPECT_NE(changes.find("job 'c' added"), std::string::npos) << changes;
     auto reordered = before;
     std::swap(reordered[0], reordered[1]);
@@ -119,5 +131,6 @@ TEST(BatchGrid, EveryObjectWithEveryTextureAndOverrideSet) {
     EXPECT_NE(error_of([&] { make_grid(no_base); }).find("--base-scene"), std::string::npos);
     GridSpec missing = spec;
     missing.textures = {"nothere.png"};
-    EXPECT_NE(error_of([&] { make_grid(missing); }).find("texture 'nothere.png' does not exist"), std::string::npos);
+    EXPECT_NE(error_of([&] { make_grid(missing); }).find("texture 'nothere.png' does not exist"),
+              std::string::npos);
 }

@@ -1,6 +1,8 @@
 // Runs that survive the scheduler (README "Runs that survive"): output names, the folder lock,
 // stop signals with a checkpoint and a byte-identical resume, input hashes on resume, stale
 // temporaries, and the completion record.
+#include <gtest/gtest.h>
+#include <signal.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/config.h>
 #include <tdf/core/error.h>
@@ -11,13 +13,9 @@
 #include <tdf/train/optimize_run.h>
 #include <tdf/train/run_guard.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
-#include <signal.h>
-
 #include <filesystem>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 namespace fs = std::filesystem;
@@ -76,16 +74,19 @@ std::string copy_scene(const std::string& folder) {
     const std::string target = fresh(folder);
     fs::create_directories(target);
     for (const auto& entry : fs::directory_iterator(kSceneFolder))
-        if (entry.is_regular_file()) fs::copy_file(entry.path(), target + "/" + entry.path().filename().string());
+        if (entry.is_regular_file())
+            fs::copy_file(entry.path(), target + "/" + entry.path().filename().string());
     return target + "/scene.json";
 }
 
 }  // namespace
 
 TEST(RunGuard, EmptyOutputAndEscapingNamesAreRefused) {
-    EXPECT_NE(error_of([] { validate_output_target("", "pebble"); }).find("-o/--output is empty"), std::string::npos);
+    EXPECT_NE(error_of([] { validate_output_target("", "pebble"); }).find("-o/--output is empty"),
+              std::string::npos);
     for (const char* name : {"../x", "a/b", "..", ".", ""})
-        EXPECT_NE(error_of([&] { validate_output_target("out", name); }).find("--name"), std::string::npos) << name;
+        EXPECT_NE(error_of([&] { validate_output_target("out", name); }).find("--name"), std::string::npos)
+            << name;
     EXPECT_NO_THROW(validate_output_target("out", "pebble.v2"));
 
     // Through the whole run: nothing is written outside the output folder.
@@ -107,7 +108,8 @@ TEST(RunGuard, SecondRunIntoALockedFolderIsRefusedInOneLine) {
         EXPECT_NE(message.find("is in use by another tdf run (optimize on"), std::string::npos) << message;
         EXPECT_EQ(message.find('\n'), std::string::npos) << message;
         // A whole run into the locked folder stops before writing anything.
-        const std::string run_message = error_of([&] { run_optimize(options_for("locked", tiny_run(2, 1))); });
+        const std::string run_message =
+            error_of([&] { run_optimize(options_for("locked", tiny_run(2, 1))); });
         EXPECT_NE(run_message.find("in use by another tdf run"), std::string::npos) << run_message;
         EXPECT_FALSE(fs::exists(folder + "/pebble_config.json"));
     }
@@ -196,8 +198,13 @@ TEST(RunGuard, SigtermCheckpointsAtTheNextIterationAndResumeIsByteIdentical) {
     run_optimize(resume);
     const std::string a = test::scratch_dir() + "/run_guard/straight/pebble";
     const std::string b = stopped.output_dir + "/pebble";
-    for (const char* suffix : {"_albedo.exr", "_tactile_normal.exr", "_albedo.png", "_tactile_normal.png",
-                               "_initialized_albedo.exr", ".obj", "_config.json"})
+    for (const char* suffix : {"_albedo.exr",
+                               "_tactile_normal.exr",
+                               "_albedo.png",
+                               "_tactile_normal.png",
+                               "_initialized_albedo.exr",
+                               ".obj",
+                               "_config.json"})
         EXPECT_EQ(read_text_file(a + suffix), read_text_file(b + suffix)) << suffix;
     EXPECT_TRUE(fs::exists(completion_record_path(stopped.output_dir, "pebble")));
 }
@@ -252,7 +259,8 @@ TEST(RunGuard, SceneInputsFollowParentsAndMeshSidecars) {
     const std::vector<std::string> files = scene_input_files(scene, {"extra.png"});
     const auto has = [&](const std::string& suffix) {
         for (const std::string& f : files)
-            if (f.size() >= suffix.size() && f.compare(f.size() - suffix.size(), suffix.size(), suffix) == 0) return true;
+            if (f.size() >= suffix.size() && f.compare(f.size() - suffix.size(), suffix.size(), suffix) == 0)
+                return true;
         return false;
     };
     EXPECT_TRUE(has("scene.json"));
@@ -263,5 +271,6 @@ TEST(RunGuard, SceneInputsFollowParentsAndMeshSidecars) {
     const Json a = {{"x.png", "01"}, {"y.obj", "02"}};
     EXPECT_EQ(describe_input_changes(a, a), "");
     const Json b = {{"x.png", "09"}, {"z.png", "03"}};
-    EXPECT_EQ(describe_input_changes(a, b), "x.png changed, y.obj is no longer an input, z.png is a new input");
+    EXPECT_EQ(describe_input_changes(a, b),
+              "x.png changed, y.obj is no longer an input, z.png is a new input");
 }

@@ -25,20 +25,21 @@ const char* job_status_name(JobStatus status);
 
 struct JobState {
     JobStatus status = JobStatus::Pending;
-    int exit_code = -1;           ///< the tdf process's exit code, -1 when none
-    int signal = 0;               ///< terminating signal, 0 when none
-    std::string error;            ///< the error line (last "tdf ..." line of the log) for failed jobs
-    int attempts = 0;             ///< starts, including requeues and resumed runs
-    double seconds = 0;           ///< wall time of the last attempt
-    double seconds_total = 0;     ///< wall time of all attempts
+    int exit_code = -1;             ///< the tdf process's exit code, -1 when none
+    int signal = 0;                 ///< terminating signal, 0 when none
+    std::string error;              ///< the error line (last "tdf ..." line of the log) for failed jobs
+    int attempts = 0;               ///< starts, including requeues and resumed runs
+    double seconds = 0;             ///< wall time of the last attempt
+    double seconds_total = 0;       ///< wall time of all attempts
     std::string started, finished;  ///< UTC ISO 8601
     std::string host;
-    int pid = 0;                  ///< the runner's pid while running
-    std::string slurm_job;        ///< "<array job>_<task>" under Slurm
-    std::string command_line;     ///< the tdf command of the last attempt
-    std::string output;           ///< absolute output folder
-    std::string thumbnail;        ///< a PNG the job produced (path relative to the batch folder), or ""
-    Json quality = Json::object();  ///< the job's quality numbers (optimize: held-out report; compare: PSNR, ...)
+    int pid = 0;               ///< the runner's pid while running
+    std::string slurm_job;     ///< "<array job>_<task>" under Slurm
+    std::string command_line;  ///< the tdf command of the last attempt
+    std::string output;        ///< absolute output folder
+    std::string thumbnail;     ///< a PNG the job produced (path relative to the batch folder), or ""
+    Json quality =
+        Json::object();  ///< the job's quality numbers (optimize: held-out report; compare: PSNR, ...)
 
     Json to_json() const;
     static JobState from_json(const Json& json);

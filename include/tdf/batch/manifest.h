@@ -55,6 +55,7 @@ std::string manifest_to_csv(const std::vector<BatchJob>& jobs);
 
 /// "" when `current` lists the same jobs as `recorded` (same order, names, commands, arguments,
 /// outputs); otherwise one line saying what changed ("job 'a': args differ (...); job 'c' added").
-std::string describe_manifest_changes(const std::vector<BatchJob>& recorded, const std::vector<BatchJob>& current);
+std::string describe_manifest_changes(const std::vector<BatchJob>& recorded,
+                                      const std::vector<BatchJob>& current);
 
 }  // namespace tdf

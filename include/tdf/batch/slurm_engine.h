@@ -22,18 +22,18 @@
 namespace tdf {
 
 struct SlurmOptions {
-    int max_parallel = 0;    ///< K in %K: tasks at a time, 0 = as many as Slurm allows
-    int cpus_per_task = 1;   ///< --cpus-per-task
-    int signal_seconds = 120;  ///< --signal=B:USR1@S lead time before the time limit
+    int max_parallel = 0;                     ///< K in %K: tasks at a time, 0 = as many as Slurm allows
+    int cpus_per_task = 1;                    ///< --cpus-per-task
+    int signal_seconds = 120;                 ///< --signal=B:USR1@S lead time before the time limit
     std::vector<std::string> sbatch_options;  ///< passed through to sbatch (e.g. --partition=cpu)
-    bool wait = false;       ///< block (sbatch --wait on the summary job) until everything ended
+    bool wait = false;  ///< block (sbatch --wait on the summary job) until everything ended
     std::string sbatch = "sbatch";
 };
 
 struct SlurmSubmission {
-    std::string array_job;    ///< Slurm job id of the array
-    std::string summary_job;  ///< id of the dependent summary job
-    std::string array_spec;   ///< the --array value
+    std::string array_job;       ///< Slurm job id of the array
+    std::string summary_job;     ///< id of the dependent summary job
+    std::string array_spec;      ///< the --array value
     int summary_exit_code = -1;  ///< with `wait`: the summary job's exit code (batch status exit code)
 };
 

@@ -97,7 +97,8 @@ std::vector<std::string> remove_stale_temporaries(const std::string& folder);
 /// references (OBJ `mtllib` and the MTL's maps, glTF external buffers and images), the albedo
 /// image, the tactile maps and the label map; plus `extra` files (e.g. guidance exemplars).
 /// Sorted, without duplicates, as given (absolute when the scene resolved them so).
-std::vector<std::string> scene_input_files(const SceneDescription& scene, const std::vector<std::string>& extra = {});
+std::vector<std::string> scene_input_files(const SceneDescription& scene,
+                                           const std::vector<std::string>& extra = {});
 
 /// Files named by `exemplars` arrays in a guidance configuration (`{"<backend>": {"exemplars": [...]}}`).
 std::vector<std::string> guidance_exemplar_files(const Json& guidance_config);
@@ -114,7 +115,8 @@ std::string describe_input_changes(const Json& recorded, const Json& current);
 /// other input contents (naming the files). `resolved_config` is the run's resolved
 /// configuration as compact JSON text, `inputs` its hash_input_files(). A checkpoint without
 /// recorded hashes (older tdf) is accepted with a warning.
-void verify_resume(const std::string& checkpoint_path, const std::string& resolved_config, const Json& inputs);
+void verify_resume(const std::string& checkpoint_path, const std::string& resolved_config,
+                   const Json& inputs);
 
 // ---- completion record --------------------------------------------------------------------
 
