@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <ctime>
 #include <filesystem>
+#include <map>
 
 namespace tdf {
 
@@ -99,6 +100,17 @@ BatchFolder BatchFolder::create(const std::string& root, const std::vector<Batch
     BatchFolder folder;
     folder.m_root = fs::absolute(root).lexically_normal().string();
     while (folder.m_root.size() > 1 && folder.m_root.back() == '/') folder.m_root.pop_back();
+    // Two jobs writing into one folder would refuse each other (the folder lock) or mix outputs.
+    std::map<std::string, std::string> owner;
+    for (const BatchJob& job : jobs) {
+        const std::string out = folder.output_folder(job);
+        if (out == folder.m_root || out == folder.path("state") || out == folder.path("logs"))
+            throw_error(
+                "job '{}': output folder '{}' is the batch folder or one of its own", job.name, job.output);
+        const auto [it, fresh] = owner.emplace(out, job.name);
+        if (!fresh)
+            throw_error("jobs '{}' and '{}' have the same output folder '{}'", it->second, job.name, out);
+    }
     const std::string manifest = folder.path("manifest.jsonl");
     if (fs::exists(manifest)) {
         const std::vector<BatchJob> recorded = read_manifest(manifest);
@@ -158,7 +170,9 @@ std::string BatchFolder::path(const std::string& relative) const { return m_root
 std::string BatchFolder::output_folder(const BatchJob& job) const {
     if (job.output.empty()) return path("jobs/" + job.name);
     const fs::path out(job.output);
-    return (out.is_absolute() ? out : fs::path(m_root) / out).lexically_normal().string();
+    std::string folder = (out.is_absolute() ? out : fs::path(m_root) / out).lexically_normal().string();
+    while (folder.size() > 1 && folder.back() == '/') folder.pop_back();
+    return folder;
 }
 
 std::string BatchFolder::state_path(const BatchJob& job) const { return path("state/" + job.name + ".json"); }

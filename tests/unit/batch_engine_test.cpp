@@ -9,6 +9,7 @@
 #include <tdf/batch/slurm_engine.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
+#include <unistd.h>
 
 #include <filesystem>
 
@@ -66,6 +67,37 @@ TEST(BatchEngine, ChangedManifestIsRefusedNamingTheChange) {
                   std::string::npos)
             << e.what();
     }
+}
+
+TEST(BatchEngine, SharedOutputFoldersAreRefused) {
+    const std::string root = fresh("shared_output");
+    const auto jobs =
+        parse_manifest("name,command,args,output\na,render,s.json,x\nb,render,s.json,x/\n", "m.csv");
+    try {
+        BatchFolder::create(root, jobs, "/bin/true", root);
+        FAIL() << "two jobs with one output folder were accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("jobs 'a' and 'b' have the same output folder"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(BatchEngine, ARunningStateWhoseRunnerIsGoneReadsAsFailed) {
+    const std::string root = fresh("lost");
+    const auto jobs = parse_manifest("name,command,args\na,render,s.json\n", "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, "/bin/true", root);
+    JobState state;
+    state.status = JobStatus::Running;
+    state.host = host_name();
+    state.pid = getpid();
+    folder.write_state(jobs[0], state);
+    EXPECT_EQ(folder.read_state(jobs[0]).status, JobStatus::Running);  // this process: alive
+    state.pid = 0x3fffffff;                                            // above pid_max: no such process
+    folder.write_state(jobs[0], state);
+    const JobState lost = folder.read_state(jobs[0]);
+    EXPECT_EQ(lost.status, JobStatus::Failed);
+    EXPECT_NE(lost.error.find("the runner stopped without recording a result"), std::string::npos);
 }
 
 TEST(BatchEngine, CommandLineAddsOutputJsonAndResume) {
