@@ -146,11 +146,10 @@ void run_optimize(const OptimizeOptions& options) {
         log_info("resuming at iteration {} from {}", iteration, checkpoint_path);
     }
     const auto save_checkpoint = [&] {
-        const Json extra = {{"iteration", trainer.iteration()},
+        const Json extra = {{"inputs", inputs}, {"iteration", trainer.iteration()},  // run safety: input hashes
                             {"seed", description.seed},
                             {"config", resolved_text},
-                            {"losses", log.to_json_lines()},
-                            {"inputs", inputs}};
+                            {"losses", log.to_json_lines()}};
         save_field_checkpoint(checkpoint_path, trainer.field().parameters(), trainer.optimizer().state(), extra.dump());
     };
     const auto write_log = [&] {
