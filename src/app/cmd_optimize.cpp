@@ -2,6 +2,7 @@
 #include "commands.h"
 
 #include <tdf/train/optimize_run.h>
+#include <tdf/train/run_guard.h>
 
 namespace tdf::app {
 
@@ -21,6 +22,7 @@ Command register_optimize(CLI::App& root) {
         ->capture_default_str();
     command.app = app;
     command.run = [options] {
+        const StopSignals stop_signals;  // SIGTERM/SIGINT/SIGUSR1: checkpoint, exit kExitInterrupted (main.cpp)
         run_optimize(*options);
         return 0;
     };

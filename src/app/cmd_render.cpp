@@ -5,14 +5,41 @@
 #include <tdf/core/progress.h>
 #include <tdf/io/image_io.h>
 #include <tdf/render/scene_assets.h>
+#include <tdf/train/run_guard.h>
 
 #include <filesystem>
+#include <regex>
+#include <set>
 
 #include "commands.h"
 
 namespace tdf::app {
 
 namespace {
+
+namespace fs = std::filesystem;
+
+// Removes the view files of an earlier render into `folder` that this render will not rewrite
+// (more views, other passes, or PNGs without --png), so the folder never mixes two renders.
+void remove_stale_views(const std::string& folder, std::size_t views, const std::vector<Pass>& passes, bool png) {
+    std::set<std::string> fresh;
+    for (std::size_t k = 0; k < views; ++k) {
+        fresh.insert(fmt::format("view_{:03d}.exr", k));
+        if (png)
+            for (const Pass pass : passes) fresh.insert(fmt::format("view_{:03d}_{}.png", k, pass_name(pass)));
+    }
+    static const std::regex view_file(R"(view_[0-9]+(\.exr|_[a-z_]+\.png))");
+    std::vector<std::string> stale;
+    for (const auto& entry : fs::directory_iterator(folder)) {
+        const std::string file = entry.path().filename().string();
+        if (entry.is_regular_file() && std::regex_match(file, view_file) && !fresh.count(file)) stale.push_back(file);
+    }
+    if (stale.empty()) return;
+    std::sort(stale.begin(), stale.end());
+    for (const std::string& file : stale) fs::remove(fs::path(folder) / file);
+    log_info("removed {} file(s) of an earlier render in {} that this render does not write ({}{})", stale.size(), folder,
+             stale.front(), stale.size() > 1 ? ", ..., " + stale.back() : "");
+}
 
 struct RenderOptions {
     std::string scene;
@@ -49,6 +76,9 @@ int run_render(const RenderOptions& o) {
              assets->mesh.triangles.size(),
              assets->views.size());
     ensure_folder(o.output);
+    // Lock the folder, clean what a killed run left, and clear views this render will not rewrite.
+    const RunGuard guard(o.output, "render", "render");
+    remove_stale_views(o.output, assets->views.size(), assets->passes, o.png);
     const std::string resolved = o.output + "/resolved_scene.json";
     write_text_atomically(resolved, description.to_json().dump(2) + "\n");
     log_verbose("resolved scene written to {}", resolved);
@@ -69,6 +99,7 @@ int run_render(const RenderOptions& o) {
         progress.advance(1, view.label);
     }
     progress.finish();
+    guard.complete({{"views", assets->views.size()}});
     log_info("wrote {} views to {}", assets->views.size(), o.output);
     return 0;
 }

@@ -5,6 +5,7 @@
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/core/parallel.h>
+#include <tdf/train/run_guard.h>
 
 #include <cstdio>
 #include <exception>
@@ -23,7 +24,7 @@ int main(int argc, char** argv) {
 
     std::vector<app::Command> commands = {
         app::register_render(root),  app::register_compare(root), app::register_tactile(root),
-        app::register_atlas(root),   app::register_optimize(root),
+        app::register_atlas(root),   app::register_optimize(root), app::register_batch(root),
     };
     for (auto& c : commands) c.app->fallthrough();  // global flags may follow the subcommand
 
@@ -57,6 +58,9 @@ int main(int argc, char** argv) {
         if (!c.app->parsed()) continue;
         try {
             return c.run();
+        } catch (const RunInterrupted& e) {
+            std::fprintf(stderr, "tdf %s: %s\n", c.app->get_name().c_str(), e.what());
+            return kExitInterrupted;
         } catch (const Error& e) {
             std::fprintf(stderr, "tdf %s: %s\n", c.app->get_name().c_str(), e.what());
             return 1;

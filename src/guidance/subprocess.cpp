@@ -31,14 +31,14 @@ struct ChildFailure {
     _exit(127);
 }
 
-int open_output(const std::string& path) {
-    return open(path.empty() ? "/dev/null" : path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+int open_output(const std::string& path, bool append) {
+    return open(path.empty() ? "/dev/null" : path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | (append ? O_APPEND : O_TRUNC),
+                0644);
 }
 }  // namespace
 
-ProcessOutcome run_process(const std::vector<std::string>& argv, const std::string& working_folder,
-                           double timeout_seconds, const std::string& stdout_path,
-                           const std::string& stderr_path) {
+int spawn_process(const std::vector<std::string>& argv, const std::string& working_folder,
+                  const std::string& stdout_path, const std::string& stderr_path, bool append) {
     TDF_CHECK(!argv.empty());
     // Everything the child needs is prepared before fork: after fork in a multi-threaded process
     // only async-signal-safe calls are allowed until exec.
@@ -50,7 +50,8 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
     if (pipe2(report, O_CLOEXEC) != 0)
         throw_error("cannot run '{}': pipe: {}", argv[0], std::strerror(errno));
 
-    const auto start = std::chrono::steady_clock::now();
+    sigset_t no_signals;
+    sigemptyset(&no_signals);
     const pid_t pid = fork();
     if (pid < 0) {
         close(report[0]);
@@ -60,10 +61,12 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
     if (pid == 0) {
         // Own process group, so a timeout kills the program and everything it started.
         setpgid(0, 0);
+        // A caller waiting with sigwaitinfo blocks signals; the program must not inherit that.
+        sigprocmask(SIG_SETMASK, &no_signals, nullptr);
         if (!working_folder.empty() && chdir(working_folder.c_str()) != 0) child_fail(report[1], 0);
-        const int out = open_output(stdout_path);
+        const int out = open_output(stdout_path, append);
         if (out < 0) child_fail(report[1], 1);
-        const int err = open_output(stderr_path);
+        const int err = open_output(stderr_path, append);
         if (err < 0) child_fail(report[1], 2);
         dup2(out, STDOUT_FILENO);
         dup2(err, STDERR_FILENO);
@@ -105,6 +108,14 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
                 throw_error("cannot run '{}': {}", argv[0], std::strerror(failure.error));
         }
     }
+    return pid;
+}
+
+ProcessOutcome run_process(const std::vector<std::string>& argv, const std::string& working_folder,
+                           double timeout_seconds, const std::string& stdout_path,
+                           const std::string& stderr_path) {
+    const auto start = std::chrono::steady_clock::now();
+    const pid_t pid = spawn_process(argv, working_folder, stdout_path, stderr_path);
 
     ProcessOutcome outcome;
     const auto deadline = start + std::chrono::duration<double>(timeout_seconds);

@@ -1,5 +1,6 @@
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
+#include <tdf/core/hash.h>
 #include <tdf/optim/checkpoint.h>
 
 #include <cerrno>
@@ -14,15 +15,6 @@ namespace {
 constexpr char kMagic[8] = {'T', 'D', 'F', 'C', 'K', 'P', 'T', '\0'};
 constexpr std::uint32_t kVersion = 1;
 constexpr std::size_t kHeaderSize = 8 + 4 + 4 + 8 + 8 + 8;
-
-std::uint64_t fnv1a(const char* data, std::size_t size) {
-    std::uint64_t h = 1469598103934665603ULL;
-    for (std::size_t i = 0; i < size; ++i) {
-        h ^= std::uint8_t(data[i]);
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
 
 template <typename T>
 void append(std::string& out, const T& value) {

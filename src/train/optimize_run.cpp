@@ -12,6 +12,7 @@
 #include <tdf/tactile/tactile_map.h>
 #include <tdf/train/asset_export.h>
 #include <tdf/train/run_report.h>
+#include <tdf/train/run_guard.h>
 #include <tdf/train/trainer.h>
 
 #include <fmt/format.h>
@@ -74,7 +75,7 @@ void run_optimize(const OptimizeOptions& options) {
         throw_error("{}: the scene names no tactile texture (tactile.images); `tdf optimize` needs one", options.scene_path);
     const std::string name =
         options.name.empty() ? fs::absolute(options.scene_path).parent_path().filename().string() : options.name;
-    ensure_folder(options.output_dir);
+    const RunGuard guard(options.output_dir, name, "optimize");  // run safety: README "Runs that survive"
 
     std::unique_ptr<SceneAssets> assets = load_scene_assets(description);
     {
@@ -97,6 +98,9 @@ void run_optimize(const OptimizeOptions& options) {
     const Json config_json = config.to_json();
     for (auto it = config_json.begin(); it != config_json.end(); ++it) resolved[it.key()] = *it;
     const std::string base = options.output_dir + "/" + name;
+    // run safety: hash every input; a refused resume stops here, before anything is written
+    const Json inputs = hash_input_files(scene_input_files(description, guidance_exemplar_files(config.guidance_config)));
+    if (options.resume) verify_resume(options.output_dir + "/checkpoint.bin", resolved.dump(), inputs);
     write_text_atomically(base + "_config.json", resolved.dump(2) + "\n");
     log_info("tdf optimize: scene {}, seed {}, {} iterations ({} matching), resolved configuration in {}_config.json",
              options.scene_path, description.seed, config.iterations, config.init_iterations, base);
@@ -130,7 +134,7 @@ void run_optimize(const OptimizeOptions& options) {
         log_info("resuming at iteration {} from {}", iteration, checkpoint_path);
     }
     const auto save_checkpoint = [&] {
-        const Json extra = {{"iteration", trainer.iteration()},
+        const Json extra = {{"inputs", inputs}, {"iteration", trainer.iteration()},  // run safety: input hashes
                             {"seed", description.seed},
                             {"config", resolved_text},
                             {"losses", log.to_json_lines()}};
@@ -174,11 +178,13 @@ void run_optimize(const OptimizeOptions& options) {
             log_info("after matching: albedo PSNR {:.2f} dB (held-out views, foreground), tactile mean cosine {:.4f}",
                      matched.albedo_psnr_foreground, matched.tactile_mean_cosine);
         }
+        if (stop_requested()) break;  // run safety: a stop signal ends the run at this iteration boundary
     }
     progress.finish();
     write_log();
     if (trainer.iteration() < config.iterations) {
         save_checkpoint();
+        if (stop_requested()) throw_interrupted(trainer.iteration(), checkpoint_path);  // run safety
         log_info("stopped after iteration {} as asked; continue with --resume", trainer.iteration());
         return;
     }
@@ -197,6 +203,7 @@ void run_optimize(const OptimizeOptions& options) {
     log_info("held-out quality: albedo PSNR {:.2f} dB (foreground), tactile mean cosine {:.4f}; report in {}_report.json",
              quality.albedo_psnr_foreground, quality.tactile_mean_cosine, base);
     write_optimize_report(options.output_dir, name, options.scene_path, *assets, config);  // <name>_report.html
+    guard.complete({{"report", name + "_report.json"}});  // run safety: the completion record, written last
 }
 
 }  // namespace tdf

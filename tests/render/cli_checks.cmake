@@ -83,3 +83,22 @@ if(NOT EXISTS ${OUT_DIR}/raster_diffs/view_000.diff.exr)
   message(FATAL_ERROR "tdf compare --diff on folders did not write raster_diffs/view_000.diff.exr")
 endif()
 expect(1 "must both be folders" ${TDF} compare ${OUT_DIR}/turn ${OUT_DIR}/turn/view_000.exr)
+
+# Re-rendering fewer views (and no PNGs) into an old folder clears the stale views and says so;
+# the completion record is written last.
+expect(0 "" ${TDF} -q render ${_scene} -o ${OUT_DIR}/fewer --turntable 3 image.width=16 image.height=16 --png)
+execute_process(COMMAND ${TDF} render ${_scene} -o ${OUT_DIR}/fewer --turntable 2 image.width=16 image.height=16
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT err MATCHES "removed [0-9]+ file\\(s\\) of an earlier render")
+  message(FATAL_ERROR "re-render with fewer views: exit ${rc}, no notice of the stale views:\n${err}")
+endif()
+foreach(_f view_002.exr view_000_lambertian.png view_002_lambertian.png)
+  if(EXISTS ${OUT_DIR}/fewer/${_f})
+    message(FATAL_ERROR "stale ${_f} left after re-rendering 2 views without --png")
+  endif()
+endforeach()
+foreach(_f view_000.exr view_001.exr render_complete.json)
+  if(NOT EXISTS ${OUT_DIR}/fewer/${_f})
+    message(FATAL_ERROR "re-render did not write ${_f}")
+  endif()
+endforeach()

@@ -14,6 +14,13 @@ struct ProcessOutcome {
     double seconds = 0.0;    ///< wall-clock run time
 };
 
+/// Starts `argv` (argv[0] looked up in PATH) in its own process group, in `working_folder`, with
+/// stdout and stderr going to the given files ("" = /dev/null; appended to when `append`, else
+/// truncated), stdin from /dev/null and an empty signal mask; returns its pid without waiting.
+/// Throws tdf::Error naming argv[0] when it cannot be started. The caller reaps it (waitpid).
+int spawn_process(const std::vector<std::string>& argv, const std::string& working_folder,
+                  const std::string& stdout_path, const std::string& stderr_path, bool append = false);
+
 /// Runs `argv` (argv[0] looked up in PATH) in `working_folder` with stdout and stderr written to
 /// the given files (created or truncated; "" = /dev/null). Waits at most `timeout_seconds`.
 /// Throws tdf::Error naming argv[0] when the program cannot be started (not found, not

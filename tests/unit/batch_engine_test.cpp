@@ -1,0 +1,208 @@
+// The batch folder, the local engine (with a stand-in for the tdf executable, so that these
+// tests stay fast), the summary and the Slurm array script. The real tdf under the local engine
+// and under a real Slurm is tested by tests/batch/batch_test.sh (ctest BatchCli.*).
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <tdf/batch/batch_folder.h>
+#include <tdf/batch/batch_summary.h>
+#include <tdf/batch/job_runner.h>
+#include <tdf/batch/slurm_engine.h>
+#include <tdf/core/atomic_file.h>
+#include <tdf/core/error.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "common/test_paths.h"
+
+using namespace tdf;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string fresh(const std::string& name) {
+    const std::string path = test::scratch_dir() + "/batch_engine/" + name;
+    fs::remove_all(path);
+    fs::create_directories(path);
+    return path;
+}
+
+// A stand-in for tdf: `fake --threads N <command> <args...>`. "ok" succeeds, "fail" prints a tdf
+// error line and exits 1, "compare" prints a report; every job writes its thread count.
+std::string fake_tdf(const std::string& folder) {
+    const std::string path = folder + "/fake_tdf.sh";
+    write_text_atomically(
+        path,
+        "#!/bin/sh\n"
+        "threads=$2; cmd=$3; shift 3\n"
+        "echo \"progress line\" >&2\n"
+        "case \"$cmd\" in\n"
+        "  compare) echo '{\"result\": \"pass\", \"overall\": {\"psnr\": 41.5, \"max_error\": 0.01}}';"
+        " exit 0;;\n"
+        "esac\n"
+        "case \"$1\" in\n"
+        "  fail) echo \"tdf $cmd: scene.json: unknown key 'colour'\" >&2; echo 'trailing' >&2; exit 1;;\n"
+        "  ok) out=$3; mkdir -p \"$out\"; echo $threads > \"$out/threads.txt\"; : > \"$out/a.png\";"
+        " exit 0;;\n"
+        "esac\n"
+        "exit 3\n");
+    chmod(path.c_str(), 0755);
+    return path;
+}
+
+}  // namespace
+
+TEST(BatchEngine, ChangedManifestIsRefusedNamingTheChange) {
+    const std::string root = fresh("refuse");
+    const auto jobs = parse_manifest("name,command,args\na,tactile,ok x {out}\n", "m.csv");
+    BatchFolder::create(root, jobs, "/bin/true", root);
+    EXPECT_NO_THROW(BatchFolder::create(root, jobs, "/bin/true", root));  // same manifest: continue
+    auto changed = jobs;
+    changed[0].args[0] = "fail";
+    try {
+        BatchFolder::create(root, changed, "/bin/true", root);
+        FAIL() << "a changed manifest was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("was made from another manifest: job 'a': args differ"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(BatchEngine, SharedOutputFoldersAreRefused) {
+    const std::string root = fresh("shared_output");
+    const auto jobs =
+        parse_manifest("name,command,args,output\na,render,s.json,x\nb,render,s.json,x/\n", "m.csv");
+    try {
+        BatchFolder::create(root, jobs, "/bin/true", root);
+        FAIL() << "two jobs with one output folder were accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("jobs 'a' and 'b' have the same output folder"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(BatchEngine, ARunningStateWhoseRunnerIsGoneReadsAsFailed) {
+    const std::string root = fresh("lost");
+    const auto jobs = parse_manifest("name,command,args\na,render,s.json\n", "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, "/bin/true", root);
+    JobState state;
+    state.status = JobStatus::Running;
+    state.host = host_name();
+    state.pid = getpid();
+    folder.write_state(jobs[0], state);
+    EXPECT_EQ(folder.read_state(jobs[0]).status, JobStatus::Running);  // this process: alive
+    state.pid = 0x3fffffff;                                            // above pid_max: no such process
+    folder.write_state(jobs[0], state);
+    const JobState lost = folder.read_state(jobs[0]);
+    EXPECT_EQ(lost.status, JobStatus::Failed);
+    EXPECT_NE(lost.error.find("the runner stopped without recording a result"), std::string::npos);
+}
+
+TEST(BatchEngine, CommandLineAddsOutputJsonAndResume) {
+    const std::string root = fresh("command_line");
+    const auto jobs = parse_manifest(
+        "name,command,args\n"
+        "o,optimize,s.json seed=1\n"
+        "r,render,s.json -o {out}/views\n"
+        "c,compare,a.exr b.exr\n",
+        "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, "/usr/bin/tdf", root);
+    const std::string out = root + "/jobs/o";
+    EXPECT_EQ(job_command_line(folder, jobs[0], 2),
+              (std::vector<std::string>{
+                  "/usr/bin/tdf", "--threads", "2", "optimize", "s.json", "seed=1", "-o", out}));
+    EXPECT_EQ(job_command_line(folder, jobs[1], 1).back(), root + "/jobs/r/views");
+    EXPECT_EQ(job_command_line(folder, jobs[2], 1).back(), "--json");
+    // An interrupted optimize (checkpoint, no completion record) continues with --resume.
+    write_text_atomically(out + "/checkpoint.bin", "x");
+    EXPECT_EQ(job_command_line(folder, jobs[0], 2).back(), "--resume");
+    write_text_atomically(out + "/pebble_complete.json", "{}");
+    EXPECT_EQ(job_command_line(folder, jobs[0], 2).back(), out);
+}
+
+TEST(BatchEngine, LocalEngineRunsEveryJobAndAFailureDoesNotStopTheOthers) {
+    const std::string root = fresh("local");
+    const auto jobs = parse_manifest(
+        "name,command,args\n"
+        "a,tactile,ok x {out}\n"
+        "bad,tactile,fail\n"
+        "b,tactile,ok x {out}\n"
+        "cmp,compare,a.exr b.exr\n"
+        "d,tactile,ok x {out}\n",
+        "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, fake_tdf(root), root);
+    JobRunPlan plan;
+    plan.indices = {0, 1, 2, 3, 4};
+    plan.parallel = 2;
+    plan.threads_per_job = 3;
+    const JobRunOutcome outcome = run_jobs(folder, plan);
+    EXPECT_EQ(outcome.done, 4);
+    EXPECT_EQ(outcome.failed, 1);
+    EXPECT_FALSE(outcome.stopped);
+    EXPECT_EQ(read_text_file(root + "/jobs/d/threads.txt"), "3\n");
+
+    const JobState bad = folder.read_state(jobs[1]);
+    EXPECT_EQ(bad.status, JobStatus::Failed);
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_EQ(bad.error, "tdf tactile: scene.json: unknown key 'colour'");
+    EXPECT_EQ(bad.attempts, 1);
+    const JobState a = folder.read_state(jobs[0]);
+    EXPECT_EQ(a.status, JobStatus::Done);
+    EXPECT_EQ(a.thumbnail, "jobs/a/a.png");
+    const JobState cmp = folder.read_state(jobs[3]);
+    EXPECT_EQ(cmp.quality["psnr"].get<double>(), 41.5);
+    EXPECT_EQ(cmp.quality["result"], "pass");
+
+    const BatchTotals totals = batch_totals(folder);
+    EXPECT_EQ(totals.done, 4);
+    EXPECT_EQ(totals.failed, 1);
+    EXPECT_EQ(totals.exit_code(), kBatchExitFailed);
+
+    write_batch_summary(folder);
+    const Json summary = load_json_file(root + "/summary.json");
+    EXPECT_EQ(summary["totals"]["failed"], 1);
+    EXPECT_EQ(summary["jobs"][1]["error"], "tdf tactile: scene.json: unknown key 'colour'");
+    EXPECT_EQ(summary["jobs"][0]["output"], "jobs/a");
+    EXPECT_EQ(summary["jobs"][0]["log"], "logs/a.log");
+    const std::string csv = read_text_file(root + "/summary.csv");
+    EXPECT_EQ(
+        csv.substr(0, csv.find('\n')),
+        "job,command,status,exit_code,error,attempts,seconds,seconds_total,started,finished,host,slurm_job,"
+        "output,log,thumbnail,quality.max_error,quality.psnr,quality.result");
+    EXPECT_NE(csv.find("\ncmp,compare,done,0,"), std::string::npos) << csv;
+    EXPECT_NE(
+        batch_status_table(folder).find("5 jobs: 4 done, 1 failed, 0 interrupted, 0 running, 0 pending"),
+        std::string::npos);
+
+    // The failed job again: it counts a second attempt, and its log keeps both.
+    plan.indices = {1};
+    run_jobs(folder, plan);
+    EXPECT_EQ(folder.read_state(jobs[1]).attempts, 2);
+    const std::string log = read_text_file(folder.log_path(jobs[1]));
+    EXPECT_NE(log.find("attempt 1"), std::string::npos);
+    EXPECT_NE(log.find("attempt 2"), std::string::npos);
+}
+
+TEST(BatchEngine, SlurmArraySpecAndScript) {
+    EXPECT_EQ(slurm_array_spec({0, 1, 2, 3}, 2), "0-3%2");
+    EXPECT_EQ(slurm_array_spec({1, 3, 4, 5, 9}, 0), "1,3-5,9");
+    const std::string root = fresh("slurm");
+    const auto jobs = parse_manifest("name,command,args\na,render,s.json\nb,render,s.json\n", "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, "/opt/tdf/bin/tdf", "/home/me/project");
+    SlurmOptions options;
+    options.max_parallel = 4;
+    options.cpus_per_task = 8;
+    options.signal_seconds = 300;
+    const std::string script = slurm_array_script(folder, {0, 1}, options);
+    for (const std::string& line :
+         {std::string("#SBATCH --array=0-1%4\n"),
+          std::string("#SBATCH --cpus-per-task=8\n"),
+          std::string("#SBATCH --requeue\n"),
+          std::string("#SBATCH --signal=B:USR1@300\n"),
+          "#SBATCH --output=" + root + "/logs/slurm-%A_%a.out\n",
+          std::string("#SBATCH --chdir=/home/me/project\n"),
+          "exec '/opt/tdf/bin/tdf' batch task '" + root + "' \"$SLURM_ARRAY_TASK_ID\"\n"})
+        EXPECT_NE(script.find(line), std::string::npos) << line << "\n" << script;
+}
