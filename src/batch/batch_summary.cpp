@@ -1,5 +1,9 @@
 #include <fmt/format.h>
 #include <tdf/batch/batch_summary.h>
+
+#include <tdf/report/batch_index.h>
+
+#include <filesystem>
 #include <tdf/core/atomic_file.h>
 
 #include <set>
@@ -37,6 +41,11 @@ BatchTotals batch_totals(const BatchFolder& folder) {
 }
 
 namespace {
+
+std::error_code& ec_ignore() {
+    thread_local std::error_code ec;
+    return ec;
+}
 
 std::string inside(const BatchFolder& folder, const std::string& path) {
     const std::string root = folder.root() + "/";
@@ -128,6 +137,28 @@ void write_batch_summary(const BatchFolder& folder) {
         csv += row + "\n";
     }
     write_text_atomically(folder.path("summary.csv"), csv);
+
+    // index.html: the same rows as a page (issue 16), each linking the job's own report page.
+    std::vector<BatchRow> rows;
+    for (const Json& job : summary["jobs"]) {
+        BatchRow row;
+        row.job = job["job"].get<std::string>();
+        row.status = job["status"].get<std::string>();
+        row.error = job["error"].get<std::string>();
+        row.wall_seconds = job["seconds"].is_number() ? job["seconds"].get<double>() : -1.0;
+        for (auto it = job["quality"].begin(); it != job["quality"].end(); ++it)
+            if (it->is_number()) row.quality.emplace_back(it.key(), it->get<double>());
+        const std::string out = job["output"].get<std::string>();
+        for (const auto& entry : std::filesystem::directory_iterator(folder.path(out), ec_ignore()))
+            if (entry.path().filename().string().size() > 12 &&
+                entry.path().filename().string().rfind("_report.html") ==
+                    entry.path().filename().string().size() - 12)
+                row.page = entry.path().string();
+        const std::string thumbnail = job["thumbnail"].get<std::string>();
+        if (!thumbnail.empty() && std::filesystem::exists(folder.path(thumbnail))) row.thumbnail = folder.path(thumbnail);
+        rows.push_back(std::move(row));
+    }
+    write_batch_index(folder.path("index.html"), "tdf batch " + folder.root(), rows);
 }
 
 std::string batch_status_table(const BatchFolder& folder) {
