@@ -396,7 +396,9 @@ Image mirror_normal_map(const Image& image) {
 /// prefiltered with a mask-weighted Gaussian of sigma 0.5 / scale so the coarse copy does not
 /// alias.
 Image resample_prefiltered(const Image& image, const Image& mask, int width, int height, float scale) {
-    return resize_bilinear(scale < 1.0f ? gaussian_blur_masked(image, mask, 0.5f / scale) : image, width, height);
+    // Only the pixels the coarse copy reads are blurred (same numbers as blurring everything).
+    return scale < 1.0f ? gaussian_blur_resized(image, mask, 0.5f / scale, width, height)
+                        : resize_bilinear(image, width, height);
 }
 
 /// Resizes by `factor` (unit vectors in, unit vectors out).
@@ -662,68 +664,107 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
                                                                      : 1.0f;
     const int width = request.images[0].width(), height = request.images[0].height();
     const WorkingScale scale = working_scale(pixels_per_texel, width, height, m_options.patch_size);
-    const bool shrink = scale.width != width || scale.height != height;
 
+    // The cached exemplars are built here, before the images are refined in parallel (each
+    // image is independent and draws from its own seed streams, so the order does not matter).
+    const std::vector<Image>* scaled = use_surface ? &scaled_exemplars(scale.exemplar_factor) : nullptr;
+    const std::vector<Variant>* searched = use_surface ? nullptr : &search_variants(scale.exemplar_factor);
     GuidanceResult result;
-    for (std::size_t item = 0; item < request.images.size(); ++item) {
-        const Image& mask = request.masks[item];
-        // The relief on its own: each normal turned by the rotation that stands its surface
-        // normal upright, so the surface's curvature does not count as texture.
-        Image detail = request.images[item];
-        if (use_surface) {
-            const Image& base = request.surface_normals[item];
-            for (std::size_t p = 0; p < detail.pixel_count(); ++p) {
+    result.refined.resize(request.images.size());
+    parallel_for(request.images.size(), 1, [&](std::size_t i0, std::size_t i1) {
+        for (std::size_t item = i0; item < i1; ++item) {
+            std::vector<Variant> oriented;
+            if (use_surface) oriented = surface_variants(request, item, *scaled, scale.exemplar_factor);
+            result.refined[item] = refine_image(request, item, use_surface ? oriented : *searched, use_surface,
+                                                scale.width, scale.height);
+        }
+    });
+    return result;
+}
+
+Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, std::size_t item,
+                                              const std::vector<Variant>& variants, bool use_surface,
+                                              int work_width, int work_height) const {
+    const Image& input = request.images[item];
+    const Image& mask = request.masks[item];
+    const int width = input.width(), height = input.height();
+    const bool shrink = work_width != width || work_height != height;
+    const std::size_t row_grain = 32;
+    // The relief on its own: each normal turned by the rotation that stands its surface
+    // normal upright, so the surface's curvature does not count as texture.
+    Image detail = input;
+    if (use_surface) {
+        const Image& base = request.surface_normals[item];
+        parallel_for(std::size_t(height), row_grain, [&](std::size_t y0, std::size_t y1) {
+            for (std::size_t p = y0 * std::size_t(width); p < y1 * std::size_t(width); ++p) {
                 if (mask.data()[p] <= 0.0f) continue;
                 float* n = detail.data() + 3 * p;
                 const float* a = base.data() + 3 * p;
                 const Vec3f d = shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), safe_normalize(Vec3f(n[0], n[1], n[2])), false);
                 n[0] = d.x, n[1] = d.y, n[2] = d.z;
             }
-        }
-        Image work = detail, work_mask = mask;
-        if (shrink) {
-            const float ratio = float(scale.width) / float(width);
-            work = resample_prefiltered(detail, mask, scale.width, scale.height, ratio);
-            work_mask = resample_prefiltered(mask, Image(), scale.width, scale.height, ratio);
-            normalize_vectors(work);
-        }
-
-        std::vector<Variant> oriented;
-        if (use_surface) oriented = surface_variants(request, item, scale.exemplar_factor);
-        const std::vector<Variant>& variants = use_surface ? oriented : search_variants(scale.exemplar_factor);
-        Image refined = synthesize(work, work_mask, variants, request.seed, item);
-
-        if (shrink) {
-            // Back to full size as a change: the image keeps its own detail finer than the
-            // working copy resolves, and gains the exemplar's structure at the texel scale.
-            Image change = refined;
-            for (std::size_t i = 0; i < change.values().size(); ++i) change.values()[i] -= work.values()[i];
-            const Image up = resize_bilinear(change, width, height);
-            refined = detail;
-            for (std::size_t i = 0; i < refined.values().size(); ++i) refined.values()[i] += up.values()[i];
-        }
-        // Foreground: unit normals (stood back on their surface) times coverage, as the renders
-        // are; background: the input.
-        Image out = request.images[item];
-        for (std::size_t p = 0; p < out.pixel_count(); ++p) {
-            const float m = mask.data()[p];
-            if (m <= 0.0f) continue;
-            const float* r = refined.data() + 3 * p;
-            Vec3f n = safe_normalize(Vec3f(r[0], r[1], r[2]));
-            if (use_surface) {
-                const float* a = request.surface_normals[item].data() + 3 * p;
-                n = safe_normalize(shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), n, true));
-            }
-            float* o = out.data() + 3 * p;
-            o[0] = m * n.x, o[1] = m * n.y, o[2] = m * n.z;
-        }
-        result.refined.push_back(std::move(out));
+        });
     }
-    return result;
+    // The working copy: the image itself, or its prefiltered coarse copy (only the pixels the
+    // copy needs are filtered, no full-size temporaries).
+    Image work, work_mask;
+    if (shrink) {
+        const float ratio = float(work_width) / float(width);
+        work = resample_prefiltered(detail, mask, work_width, work_height, ratio);
+        work_mask = resample_prefiltered(mask, Image(), work_width, work_height, ratio);
+        normalize_vectors(work);
+    }
+    Image refined = synthesize(shrink ? work : detail, shrink ? work_mask : mask, variants, request.seed, item);
+
+    // Back to full size: with a coarse copy, as a change (the image keeps its own detail finer
+    // than the working copy resolves and gains the exemplar's structure at the texel scale),
+    // upsampled bilinearly on the fly (the arithmetic of resize_bilinear). Foreground: unit
+    // normals (stood back on their surface) times coverage, as the renders are; background:
+    // the input.
+    if (shrink)
+        for (std::size_t i = 0; i < refined.values().size(); ++i) refined.values()[i] -= work.values()[i];
+    Image out = input;
+    const float sx = float(work_width) / float(width), sy = float(work_height) / float(height);
+    parallel_for(std::size_t(height), row_grain, [&](std::size_t y0, std::size_t y1) {
+        for (int y = int(y0); y < int(y1); ++y) {
+            const float fy = std::clamp((float(y) + 0.5f) * sy - 0.5f, 0.0f, float(work_height - 1));
+            const int iy = std::min(int(fy), work_height - 1);
+            const int iy1 = std::min(iy + 1, work_height - 1);
+            const float ty = fy - float(iy);
+            for (int x = 0; x < width; ++x) {
+                const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                const float m = mask.data()[p];
+                if (m <= 0.0f) continue;
+                float r[3];
+                if (shrink) {
+                    const float fx = std::clamp((float(x) + 0.5f) * sx - 0.5f, 0.0f, float(work_width - 1));
+                    const int ix = std::min(int(fx), work_width - 1);
+                    const int ix1 = std::min(ix + 1, work_width - 1);
+                    const float tx = fx - float(ix);
+                    const float* d = detail.data() + 3 * p;
+                    for (int ch = 0; ch < 3; ++ch) {
+                        const float top = refined.at(ix, iy, ch) * (1 - tx) + refined.at(ix1, iy, ch) * tx;
+                        const float bottom = refined.at(ix, iy1, ch) * (1 - tx) + refined.at(ix1, iy1, ch) * tx;
+                        r[ch] = d[ch] + (top * (1 - ty) + bottom * ty);
+                    }
+                } else {
+                    std::copy_n(refined.data() + 3 * p, 3, r);
+                }
+                Vec3f n = safe_normalize(Vec3f(r[0], r[1], r[2]));
+                if (use_surface) {
+                    const float* a = request.surface_normals[item].data() + 3 * p;
+                    n = safe_normalize(shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), n, true));
+                }
+                float* o = out.data() + 3 * p;
+                o[0] = m * n.x, o[1] = m * n.y, o[2] = m * n.z;
+            }
+        }
+    });
+    return out;
 }
 
 std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surface_variants(
-    const GuidanceRequest& request, std::size_t item, float factor) {
+    const GuidanceRequest& request, std::size_t item, const std::vector<Image>& scaled_exemplars, float factor) const {
     // The map's orientation in the image: the coverage-weighted mean of the stood-up tangents
     // (u axis) and the majority handedness.
     const Image& mask = request.masks[item];
@@ -745,7 +786,7 @@ std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surfa
     const float quarter = std::round(angle / (0.5f * kPi)) * 0.5f * kPi;
     if (std::abs(angle - quarter) < 1e-3f) angle = quarter;
     std::vector<Variant> variants;
-    for (const Image& scaled : scaled_exemplars(factor)) {
+    for (const Image& scaled : scaled_exemplars) {
         const Image rotated = rotate_normal_map(handedness < 0.0 ? mirror_normal_map(scaled) : scaled, angle);
         variants.push_back(build_variant(rotated, m_options.levels, m_options.patch_size));
     }

@@ -18,26 +18,50 @@ std::vector<float> gaussian_kernel(float sigma) {
     return kernel;
 }
 
-// One 1D pass (horizontal when `horizontal`) over a weighted image: `values` holds w*x per channel
-// followed by w in the last channel.
-Image blur_pass(const Image& values, const std::vector<float>& kernel, bool horizontal) {
-    const int w = values.width(), h = values.height(), c = values.channels();
-    const int radius = int(kernel.size() / 2);
-    Image out(w, h, c);
-    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
-        for (int y = int(y0); y < int(y1); ++y)
-            for (int x = 0; x < w; ++x) {
-                float* dst = out.pixel(x, y);
-                for (int k = -radius; k <= radius; ++k) {
-                    const int sx = horizontal ? std::clamp(x + k, 0, w - 1) : x;
-                    const int sy = horizontal ? y : std::clamp(y + k, 0, h - 1);
-                    const float weight = kernel[std::size_t(k + radius)];
-                    const float* src = values.pixel(sx, sy);
-                    for (int ch = 0; ch < c; ++ch) dst[ch] += weight * src[ch];
-                }
-            }
-    });
-    return out;
+// One horizontal pass over one row: `padded` holds the row's values with `radius` clamped pixels
+// added at each end ((width + 2 radius) * channels floats), `out` receives width * channels
+// floats. Every output accumulates its taps from 0 in kernel order (-radius .. radius), the
+// same order for every pixel and every caller, so the filters below agree to the bit.
+void convolve_row(const float* padded, const std::vector<float>& kernel, int count, int channels, float* out) {
+    std::fill(out, out + count, 0.0f);
+    for (std::size_t k = 0; k < kernel.size(); ++k) {
+        const float weight = kernel[k];
+        const float* src = padded + k * std::size_t(channels);
+        for (int i = 0; i < count; ++i) out[i] += weight * src[i];
+    }
+}
+
+// Row y of the mask-weighted image with clamped padding: per pixel m * value per channel, then m
+// (1 where `mask` is empty), for x in [-radius, width + radius).
+void weighted_padded_row(const Image& image, const Image& mask, int y, int radius, float* padded) {
+    const int w = image.width(), c = image.channels();
+    for (int i = -radius; i < w + radius; ++i) {
+        const int x = std::clamp(i, 0, w - 1);
+        const float m = mask.empty() ? 1.0f : mask.at(x, y, 0);
+        const float* src = image.pixel(x, y);
+        float* dst = padded + std::size_t(i + radius) * std::size_t(c + 1);
+        for (int ch = 0; ch < c; ++ch) dst[ch] = m * src[ch];
+        dst[c] = m;
+    }
+}
+
+// The source pixels and weights one axis of resize_bilinear() reads for each output coordinate.
+struct BilinearTaps {
+    std::vector<int> first, second;  // source indices per output coordinate
+    std::vector<float> t;            // weight of `second`
+};
+
+BilinearTaps bilinear_taps(int source_size, int size) {
+    BilinearTaps taps;
+    const float s = float(source_size) / float(size);
+    for (int o = 0; o < size; ++o) {
+        const float f = std::clamp((float(o) + 0.5f) * s - 0.5f, 0.0f, float(source_size - 1));
+        const int i = std::min(int(f), source_size - 1);
+        taps.first.push_back(i);
+        taps.second.push_back(std::min(i + 1, source_size - 1));
+        taps.t.push_back(f - float(i));
+    }
+    return taps;
 }
 }  // namespace
 
@@ -45,25 +69,122 @@ Image gaussian_blur_masked(const Image& image, const Image& mask, float sigma) {
     if (sigma <= 0.0f) return image;
     const int w = image.width(), h = image.height(), c = image.channels();
     TDF_CHECK(mask.empty() || (mask.width() == w && mask.height() == h && mask.channels() == 1));
-    Image weighted(w, h, c + 1);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const float m = mask.empty() ? 1.0f : mask.at(x, y, 0);
-            float* dst = weighted.pixel(x, y);
-            const float* src = image.pixel(x, y);
-            for (int ch = 0; ch < c; ++ch) dst[ch] = m * src[ch];
-            dst[c] = m;
-        }
     const std::vector<float> kernel = gaussian_kernel(sigma);
-    const Image blurred = blur_pass(blur_pass(weighted, kernel, true), kernel, false);
-    Image out = image;
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const float* src = blurred.pixel(x, y);
-            if (src[c] <= 0.0f) continue;
-            float* dst = out.pixel(x, y);
-            for (int ch = 0; ch < c; ++ch) dst[ch] = src[ch] / src[c];
+    const int radius = int(kernel.size() / 2);
+    const int stride = c + 1;  // weighted channels, then the weight
+    const std::size_t row = std::size_t(w) * std::size_t(stride);
+    // Horizontal pass over the weighted image, built row by row (no full-size weighted copy).
+    std::vector<float> horizontal(row * std::size_t(h));
+    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
+        std::vector<float> padded(std::size_t(w + 2 * radius) * std::size_t(stride));
+        for (std::size_t y = y0; y < y1; ++y) {
+            weighted_padded_row(image, mask, int(y), radius, padded.data());
+            convolve_row(padded.data(), kernel, int(row), stride, horizontal.data() + y * row);
         }
+    });
+    // Vertical pass row by row (whole rows at a time, so it vectorises), then the division.
+    Image out = image;
+    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
+        std::vector<float> sum(row);
+        for (int y = int(y0); y < int(y1); ++y) {
+            std::fill(sum.begin(), sum.end(), 0.0f);
+            for (int k = -radius; k <= radius; ++k) {
+                const float weight = kernel[std::size_t(k + radius)];
+                const float* src = horizontal.data() + std::size_t(std::clamp(y + k, 0, h - 1)) * row;
+                for (std::size_t i = 0; i < row; ++i) sum[i] += weight * src[i];
+            }
+            for (int x = 0; x < w; ++x) {
+                const float* s = sum.data() + std::size_t(x) * std::size_t(stride);
+                if (s[c] <= 0.0f) continue;
+                float* dst = out.pixel(x, y);
+                for (int ch = 0; ch < c; ++ch) dst[ch] = s[ch] / s[c];
+            }
+        }
+    });
+    return out;
+}
+
+Image gaussian_blur_resized(const Image& image, const Image& mask, float sigma, int width, int height) {
+    if (sigma <= 0.0f) return resize_bilinear(image, width, height);
+    TDF_CHECK(width > 0 && height > 0 && !image.empty());
+    const int w = image.width(), h = image.height(), c = image.channels();
+    TDF_CHECK(mask.empty() || (mask.width() == w && mask.height() == h && mask.channels() == 1));
+    const std::vector<float> kernel = gaussian_kernel(sigma);
+    const int radius = int(kernel.size() / 2);
+    const int stride = c + 1;
+    const BilinearTaps tx = bilinear_taps(w, width), ty = bilinear_taps(h, height);
+
+    // The blurred pixels the bilinear lookup reads: columns `cols` x rows `rows` (sorted, unique).
+    const auto unique_sorted = [](const BilinearTaps& taps) {
+        std::vector<int> v = taps.first;
+        v.insert(v.end(), taps.second.begin(), taps.second.end());
+        std::sort(v.begin(), v.end());
+        v.erase(std::unique(v.begin(), v.end()), v.end());
+        return v;
+    };
+    const std::vector<int> cols = unique_sorted(tx), rows = unique_sorted(ty);
+    std::vector<int> col_slot(std::size_t(w), -1), row_slot(std::size_t(h), -1);
+    for (std::size_t j = 0; j < cols.size(); ++j) col_slot[std::size_t(cols[j])] = int(j);
+    for (std::size_t i = 0; i < rows.size(); ++i) row_slot[std::size_t(rows[i])] = int(i);
+    // Rows the vertical taps of those rows read.
+    std::vector<unsigned char> row_needed(std::size_t(h), 0);
+    for (const int y : rows)
+        for (int k = -radius; k <= radius; ++k) row_needed[std::size_t(std::clamp(y + k, 0, h - 1))] = 1;
+
+    // Horizontal pass at the needed columns of the needed rows.
+    const std::size_t hrow = cols.size() * std::size_t(stride);
+    std::vector<float> horizontal(hrow * std::size_t(h));
+    parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
+        std::vector<float> padded(std::size_t(w + 2 * radius) * std::size_t(stride));
+        for (std::size_t y = y0; y < y1; ++y) {
+            if (!row_needed[y]) continue;
+            weighted_padded_row(image, mask, int(y), radius, padded.data());
+            for (std::size_t j = 0; j < cols.size(); ++j) {
+                float* dst = horizontal.data() + y * hrow + j * std::size_t(stride);
+                const float* src = padded.data() + std::size_t(cols[j]) * std::size_t(stride);
+                std::fill(dst, dst + stride, 0.0f);
+                for (std::size_t k = 0; k < kernel.size(); ++k)
+                    for (int ch = 0; ch < stride; ++ch) dst[ch] += kernel[k] * src[k * std::size_t(stride) + std::size_t(ch)];
+            }
+        }
+    });
+    // Vertical pass and division at the needed pixels: the blurred image there.
+    const std::size_t brow = cols.size() * std::size_t(c);
+    std::vector<float> blurred(brow * rows.size());
+    parallel_for(rows.size(), 8, [&](std::size_t i0, std::size_t i1) {
+        std::vector<float> sum(static_cast<std::size_t>(stride));
+        for (std::size_t i = i0; i < i1; ++i)
+            for (std::size_t j = 0; j < cols.size(); ++j) {
+                std::fill(sum.begin(), sum.end(), 0.0f);
+                for (int k = -radius; k <= radius; ++k) {
+                    const float weight = kernel[std::size_t(k + radius)];
+                    const float* src =
+                        horizontal.data() + std::size_t(std::clamp(rows[i] + k, 0, h - 1)) * hrow + j * std::size_t(stride);
+                    for (int ch = 0; ch < stride; ++ch) sum[std::size_t(ch)] += weight * src[ch];
+                }
+                float* dst = blurred.data() + i * brow + j * std::size_t(c);
+                const float* keep = image.pixel(cols[j], rows[i]);
+                for (int ch = 0; ch < c; ++ch) dst[ch] = sum[std::size_t(c)] <= 0.0f ? keep[ch] : sum[std::size_t(ch)] / sum[std::size_t(c)];
+            }
+    });
+    // Bilinear lookup, the arithmetic of resize_bilinear().
+    Image out(width, height, c);
+    for (int y = 0; y < height; ++y) {
+        const float* top_row = blurred.data() + std::size_t(row_slot[std::size_t(ty.first[std::size_t(y)])]) * brow;
+        const float* bottom_row = blurred.data() + std::size_t(row_slot[std::size_t(ty.second[std::size_t(y)])]) * brow;
+        const float wy = ty.t[std::size_t(y)];
+        for (int x = 0; x < width; ++x) {
+            const std::size_t a = std::size_t(col_slot[std::size_t(tx.first[std::size_t(x)])]) * std::size_t(c);
+            const std::size_t b = std::size_t(col_slot[std::size_t(tx.second[std::size_t(x)])]) * std::size_t(c);
+            const float wx = tx.t[std::size_t(x)];
+            float* dst = out.pixel(x, y);
+            for (int ch = 0; ch < c; ++ch) {
+                const float top = top_row[a + std::size_t(ch)] * (1 - wx) + top_row[b + std::size_t(ch)] * wx;
+                const float bottom = bottom_row[a + std::size_t(ch)] * (1 - wx) + bottom_row[b + std::size_t(ch)] * wx;
+                dst[ch] = top * (1 - wy) + bottom * wy;
+            }
+        }
+    }
     return out;
 }
 

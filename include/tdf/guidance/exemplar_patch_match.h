@@ -126,8 +126,14 @@ private:
     /// The rotation (and flip) variants searched without surface frames, with the exemplars
     /// resampled by `factor`; rebuilt only when the factor changes.
     const std::vector<Variant>& search_variants(float factor);
-    /// One variant per exemplar, turned and mirrored as the map lies in image `item`.
-    std::vector<Variant> surface_variants(const GuidanceRequest& request, std::size_t item, float factor);
+    /// One variant per exemplar (`scaled_exemplars`, resampled by `factor`), turned and mirrored
+    /// as the map lies in image `item`.
+    std::vector<Variant> surface_variants(const GuidanceRequest& request, std::size_t item,
+                                          const std::vector<Image>& scaled_exemplars, float factor) const;
+    /// Steps 1-4 for image `item` of the request, searched against `variants`, at the working
+    /// size work_width x work_height (the image's own size, or the coarse copy's).
+    Image refine_image(const GuidanceRequest& request, std::size_t item, const std::vector<Variant>& variants,
+                       bool use_surface, int work_width, int work_height) const;
     /// Throws tdf::Error when a variant is smaller than a patch.
     void check_variants(const std::vector<Variant>& variants, float factor) const;
     /// Steps 3 of the algorithm on one (working) image: the refined unit normals.
