@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace tdf {
@@ -344,6 +345,30 @@ private:
     std::vector<unsigned char> m_active;
 };
 
+/// Sorts finite non-negative floats ascending, as std::sort does (equal values have equal bits
+/// here, so the result is the same array), by a least-significant-digit radix sort of their
+/// bits, which order like the values: 3 linear passes instead of N log N comparisons. Anything
+/// else (negative, -0, not finite) falls back to std::sort.
+void sort_non_negative(std::vector<float>& values) {
+    std::vector<std::uint32_t> keys(values.size());
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        std::memcpy(&keys[i], &values[i], sizeof(float));
+        if (keys[i] >= 0x7f800000u) {
+            std::sort(values.begin(), values.end());
+            return;
+        }
+    }
+    std::vector<std::uint32_t> swap(keys.size());
+    for (const int shift : {0, 11, 22}) {
+        std::vector<std::size_t> start(2049, 0);
+        for (const std::uint32_t k : keys) ++start[((k >> shift) & 2047u) + 1];
+        for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+        for (const std::uint32_t k : keys) swap[start[(k >> shift) & 2047u]++] = k;
+        keys.swap(swap);
+    }
+    for (std::size_t i = 0; i < values.size(); ++i) std::memcpy(&values[i], &keys[i], sizeof(float));
+}
+
 /// Sorted tilts (angle from +z, radians) of every texel of level `level` of the variants.
 std::vector<float> sorted_tilts(const std::vector<Variant>& variants, std::size_t level) {
     std::vector<float> tilts;
@@ -352,7 +377,7 @@ std::vector<float> sorted_tilts(const std::vector<Variant>& variants, std::size_
         for (std::size_t p = 0; p < e.pixel_count(); ++p)
             tilts.push_back(std::acos(std::clamp(e.data()[3 * p + 2], -1.0f, 1.0f)));
     }
-    std::sort(tilts.begin(), tilts.end());
+    sort_non_negative(tilts);
     return tilts;
 }
 
@@ -567,9 +592,21 @@ const std::vector<ExemplarPatchMatchBackend::Variant>& ExemplarPatchMatchBackend
         }
     }
     check_variants(variants, factor);
+    m_search_tilts = tilt_tables(variants);
     m_search_variants = std::move(variants);
     m_search_factor = factor;
     return m_search_variants;
+}
+
+std::vector<std::vector<float>> ExemplarPatchMatchBackend::tilt_tables(const std::vector<Variant>& variants) const {
+    // Per level; every variant of a set has the same number of levels (each is at least two
+    // patches wide, and the rotated exemplars of a set have one size).
+    std::size_t levels = variants.empty() ? 0 : variants.front().levels.size();
+    for (const Variant& v : variants) levels = std::min(levels, v.levels.size());
+    std::vector<std::vector<float>> tilts(levels);
+    if (m_options.match_tilt_histogram)
+        for (std::size_t l = 0; l < levels; ++l) tilts[l] = sorted_tilts(variants, l);
+    return tilts;
 }
 
 void ExemplarPatchMatchBackend::check_variants(const std::vector<Variant>& variants, float factor) const {
@@ -587,7 +624,8 @@ void ExemplarPatchMatchBackend::check_variants(const std::vector<Variant>& varia
 }
 
 Image ExemplarPatchMatchBackend::synthesize(const Image& input, const Image& input_mask,
-                                            const std::vector<Variant>& variants, std::uint64_t seed,
+                                            const std::vector<Variant>& variants,
+                                            const std::vector<std::vector<float>>& tilts, std::uint64_t seed,
                                             std::size_t item) const {
     // Levels usable by every variant and by the image (at least two patches wide).
     const int patch = m_options.patch_size;
@@ -626,7 +664,7 @@ Image ExemplarPatchMatchBackend::synthesize(const Image& input, const Image& inp
             LevelSolver solver(estimate, masks[l], variants, int(l), patch);
             field = solver.upsampled_field(field, coarse_width, coarse_height, mix_seed(seed, item, level_stage + 1023));
         }
-        const std::vector<float> exemplar_tilts = sorted_tilts(variants, l);
+        const std::vector<float>& exemplar_tilts = tilts[l];
         for (int em = 0; em < m_options.em_iterations; ++em) {
             if (m_options.match_tilt_histogram) match_tilt_histogram(estimate, masks[l], exemplar_tilts);
             LevelSolver solver(estimate, masks[l], variants, int(l), patch);
@@ -674,8 +712,13 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
     parallel_for(request.images.size(), 1, [&](std::size_t i0, std::size_t i1) {
         for (std::size_t item = i0; item < i1; ++item) {
             std::vector<Variant> oriented;
-            if (use_surface) oriented = surface_variants(request, item, *scaled, scale.exemplar_factor);
-            result.refined[item] = refine_image(request, item, use_surface ? oriented : *searched, use_surface,
+            std::vector<std::vector<float>> oriented_tilts;
+            if (use_surface) {
+                oriented = surface_variants(request, item, *scaled, scale.exemplar_factor);
+                oriented_tilts = tilt_tables(oriented);
+            }
+            result.refined[item] = refine_image(request, item, use_surface ? oriented : *searched,
+                                                use_surface ? oriented_tilts : m_search_tilts, use_surface,
                                                 scale.width, scale.height);
         }
     });
@@ -683,7 +726,8 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
 }
 
 Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, std::size_t item,
-                                              const std::vector<Variant>& variants, bool use_surface,
+                                              const std::vector<Variant>& variants,
+                                              const std::vector<std::vector<float>>& tilts, bool use_surface,
                                               int work_width, int work_height) const {
     const Image& input = request.images[item];
     const Image& mask = request.masks[item];
@@ -714,7 +758,7 @@ Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, st
         work_mask = resample_prefiltered(mask, Image(), work_width, work_height, ratio);
         normalize_vectors(work);
     }
-    Image refined = synthesize(shrink ? work : detail, shrink ? work_mask : mask, variants, request.seed, item);
+    Image refined = synthesize(shrink ? work : detail, shrink ? work_mask : mask, variants, tilts, request.seed, item);
 
     // Back to full size: with a coarse copy, as a change (the image keeps its own detail finer
     // than the working copy resolves and gains the exemplar's structure at the texel scale),

@@ -45,6 +45,23 @@ void weighted_padded_row(const Image& image, const Image& mask, int y, int radiu
     }
 }
 
+// One output pixel of a horizontal pass: the taps of `kernel` over `src` (the padded row at the
+// pixel's leftmost tap), accumulated as convolve_row() does. Fixed channel counts let the
+// compiler keep the sums in one register.
+template <int Channels>
+void taps(const float* src, const std::vector<float>& kernel, float* dst) {
+    float sum[Channels] = {};
+    for (std::size_t k = 0; k < kernel.size(); ++k)
+        for (int ch = 0; ch < Channels; ++ch) sum[ch] += kernel[k] * src[k * Channels + std::size_t(ch)];
+    std::copy_n(sum, Channels, dst);
+}
+
+void taps_any(const float* src, const std::vector<float>& kernel, int channels, float* dst) {
+    std::fill(dst, dst + channels, 0.0f);
+    for (std::size_t k = 0; k < kernel.size(); ++k)
+        for (int ch = 0; ch < channels; ++ch) dst[ch] += kernel[k] * src[k * std::size_t(channels) + std::size_t(ch)];
+}
+
 // The source pixels and weights one axis of resize_bilinear() reads for each output coordinate.
 struct BilinearTaps {
     std::vector<int> first, second;  // source indices per output coordinate
@@ -142,9 +159,12 @@ Image gaussian_blur_resized(const Image& image, const Image& mask, float sigma, 
             for (std::size_t j = 0; j < cols.size(); ++j) {
                 float* dst = horizontal.data() + y * hrow + j * std::size_t(stride);
                 const float* src = padded.data() + std::size_t(cols[j]) * std::size_t(stride);
-                std::fill(dst, dst + stride, 0.0f);
-                for (std::size_t k = 0; k < kernel.size(); ++k)
-                    for (int ch = 0; ch < stride; ++ch) dst[ch] += kernel[k] * src[k * std::size_t(stride) + std::size_t(ch)];
+                if (stride == 4)
+                    taps<4>(src, kernel, dst);
+                else if (stride == 2)
+                    taps<2>(src, kernel, dst);
+                else
+                    taps_any(src, kernel, stride, dst);
             }
         }
     });

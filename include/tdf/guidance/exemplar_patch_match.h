@@ -133,18 +133,24 @@ private:
     /// Steps 1-4 for image `item` of the request, searched against `variants`, at the working
     /// size work_width x work_height (the image's own size, or the coarse copy's).
     Image refine_image(const GuidanceRequest& request, std::size_t item, const std::vector<Variant>& variants,
-                       bool use_surface, int work_width, int work_height) const;
+                       const std::vector<std::vector<float>>& tilts, bool use_surface, int work_width,
+                       int work_height) const;
+    /// The sorted tilts of all texels of `variants`, per pyramid level (the histogram matching's
+    /// target; empty tables when match_tilt_histogram is off).
+    std::vector<std::vector<float>> tilt_tables(const std::vector<Variant>& variants) const;
     /// Throws tdf::Error when a variant is smaller than a patch.
     void check_variants(const std::vector<Variant>& variants, float factor) const;
-    /// Steps 3 of the algorithm on one (working) image: the refined unit normals.
+    /// Steps 3 of the algorithm on one (working) image: the refined unit normals. `tilts`:
+    /// tilt_tables(variants).
     Image synthesize(const Image& input, const Image& mask, const std::vector<Variant>& variants,
-                     std::uint64_t seed, std::size_t item) const;
+                     const std::vector<std::vector<float>>& tilts, std::uint64_t seed, std::size_t item) const;
 
     Options m_options;
     std::vector<Image> m_exemplars;  ///< unit tangent-space normals, as given
     std::vector<Image> m_scaled_exemplars;
     float m_scaled_factor = 0.0f;
     std::vector<Variant> m_search_variants;
+    std::vector<std::vector<float>> m_search_tilts;  ///< tilt_tables(m_search_variants)
     float m_search_factor = 0.0f;
 };
 
