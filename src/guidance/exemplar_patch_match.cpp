@@ -46,38 +46,54 @@ void normalize_vectors(Image& image) {
 /// Rotates a normal map by `angle` counter-clockwise (y up): the picture and the (x, y)
 /// components of its vectors. Multiples of 90 degrees are exact index permutations (sampling
 /// lands on pixel centres); other angles are resampled bilinearly and cropped to the largest
-/// axis-aligned square inside the rotated picture.
-Image rotate_normal_map(const Image& source, float angle) {
+/// axis-aligned square inside the rotated picture. With `mirrored` the source is read as
+/// the map mirrored across the horizontal axis (rows reversed, y negated; both exact), which is
+/// how a tangent-space map appears on a chart of handedness -1 (the bitangent is flipped).
+Image rotate_normal_map(const Image& source, float angle, bool mirrored = false) {
     const float c = std::cos(angle), s = std::sin(angle);
     const int quarter = int(std::lround(angle / (0.5f * kPi)));
     const bool exact = std::abs(angle - float(quarter) * 0.5f * kPi) < 1e-6f;
-    int width = source.width(), height = source.height();
+    const int sw = source.width(), sh = source.height();
+    int width = sw, height = sh;
     if (exact && (quarter & 1)) std::swap(width, height);
-    if (!exact)
-        width = height = int(float(std::min(source.width(), source.height())) / (std::abs(c) + std::abs(s)));
-    const float cx_src = 0.5f * float(source.width() - 1), cy_src = 0.5f * float(source.height() - 1);
+    if (!exact) width = height = int(float(std::min(sw, sh)) / (std::abs(c) + std::abs(s)));
+    const float cx_src = 0.5f * float(sw - 1), cy_src = 0.5f * float(sh - 1);
     const float cx = 0.5f * float(width - 1), cy = 0.5f * float(height - 1);
+    const auto row = [&](int y) { return source.data() + std::size_t(mirrored ? sh - 1 - y : y) * std::size_t(sw) * 3; };
+    const float flip = mirrored ? -1.0f : 1.0f;
     Image out(width, height, 3);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
+    for (int y = 0; y < height; ++y) {
+        const float v = cy - float(y);
+        const float sv = s * v, cv = c * v;
+        float* dst = out.pixel(0, y);
+        for (int x = 0; x < width; ++x, dst += 3) {
             // y-up offsets from the centre, rotated back by -angle into the source.
-            const float u = float(x) - cx, v = cy - float(y);
-            float sx = c * u + s * v + cx_src;
-            float sy = cy_src - (-s * u + c * v);
+            const float u = float(x) - cx;
+            float sx = c * u + sv + cx_src;
+            float sy = cy_src - (-s * u + cv);
             if (exact) sx = std::round(sx), sy = std::round(sy);
-            sx = std::clamp(sx, 0.0f, float(source.width() - 1));
-            sy = std::clamp(sy, 0.0f, float(source.height() - 1));
+            sx = std::clamp(sx, 0.0f, float(sw - 1));
+            sy = std::clamp(sy, 0.0f, float(sh - 1));
             const int x0 = int(sx), y0 = int(sy);
-            const int x1 = std::min(x0 + 1, source.width() - 1), y1 = std::min(y0 + 1, source.height() - 1);
+            const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
             const float tx = sx - float(x0), ty = sy - float(y0);
-            Vec3f n;
-            for (int ch = 0; ch < 3; ++ch)
-                n[ch] = (source.at(x0, y0, ch) * (1 - tx) + source.at(x1, y0, ch) * tx) * (1 - ty) +
-                        (source.at(x0, y1, ch) * (1 - tx) + source.at(x1, y1, ch) * tx) * ty;
-            n = safe_normalize(Vec3f(c * n.x - s * n.y, s * n.x + c * n.y, n.z));
-            float* dst = out.pixel(x, y);
-            dst[0] = n.x, dst[1] = n.y, dst[2] = n.z;
+            const float* r0 = row(y0);
+            const float* r1 = row(y1);
+            const float* p00 = r0 + 3 * x0;
+            const float* p10 = r0 + 3 * x1;
+            const float* p01 = r1 + 3 * x0;
+            const float* p11 = r1 + 3 * x1;
+            float n[3];
+            for (int ch = 0; ch < 3; ++ch) {
+                // y components of a mirrored source are read negated (an exact sign flip).
+                const float f = ch == 1 ? flip : 1.0f;
+                n[ch] = ((f * p00[ch]) * (1 - tx) + (f * p10[ch]) * tx) * (1 - ty) +
+                        ((f * p01[ch]) * (1 - tx) + (f * p11[ch]) * tx) * ty;
+            }
+            const Vec3f r = safe_normalize(Vec3f(c * n[0] - s * n[1], s * n[0] + c * n[1], n[2]));
+            dst[0] = r.x, dst[1] = r.y, dst[2] = r.z;
         }
+    }
     return out;
 }
 
@@ -407,14 +423,6 @@ std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
     z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
     return z ^ (z >> 31);
-}
-
-/// Mirrored across the horizontal axis: rows reversed and y components negated, which is how a
-/// tangent-space map appears on a chart of handedness -1 (the bitangent is flipped).
-Image mirror_normal_map(const Image& image) {
-    Image out = flip_rows(image);
-    for (std::size_t p = 0; p < out.pixel_count(); ++p) out.data()[3 * p + 1] = -out.data()[3 * p + 1];
-    return out;
 }
 
 /// Resamples to width x height, `scale` being the size ratio: shrinking (scale < 1) is
@@ -830,10 +838,9 @@ std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surfa
     const float quarter = std::round(angle / (0.5f * kPi)) * 0.5f * kPi;
     if (std::abs(angle - quarter) < 1e-3f) angle = quarter;
     std::vector<Variant> variants;
-    for (const Image& scaled : scaled_exemplars) {
-        const Image rotated = rotate_normal_map(handedness < 0.0 ? mirror_normal_map(scaled) : scaled, angle);
-        variants.push_back(build_variant(rotated, m_options.levels, m_options.patch_size));
-    }
+    for (const Image& scaled : scaled_exemplars)
+        variants.push_back(build_variant(rotate_normal_map(scaled, angle, handedness < 0.0), m_options.levels,
+                                         m_options.patch_size));
     check_variants(variants, factor);
     return variants;
 }
