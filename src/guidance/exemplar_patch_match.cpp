@@ -62,7 +62,8 @@ Image rotate_normal_map(const Image& source, float angle, bool mirrored = false)
     const auto row = [&](int y) { return source.data() + std::size_t(mirrored ? sh - 1 - y : y) * std::size_t(sw) * 3; };
     const float flip = mirrored ? -1.0f : 1.0f;
     Image out(width, height, 3);
-    for (int y = 0; y < height; ++y) {
+    parallel_for(std::size_t(height), 16, [&](std::size_t y_begin, std::size_t y_end) {
+    for (int y = int(y_begin); y < int(y_end); ++y) {
         const float v = cy - float(y);
         const float sv = s * v, cv = c * v;
         float* dst = out.pixel(0, y);
@@ -94,6 +95,7 @@ Image rotate_normal_map(const Image& source, float angle, bool mirrored = false)
             dst[0] = r.x, dst[1] = r.y, dst[2] = r.z;
         }
     }
+    });
     return out;
 }
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <mutex>
 #include <vector>
 
 namespace tdf {
@@ -107,6 +108,43 @@ void taps_any(const float* src, const std::vector<float>& kernel, int channels, 
         for (int ch = 0; ch < channels; ++ch) dst[ch] += kernel[k] * src[k * std::size_t(channels) + std::size_t(ch)];
 }
 
+// Full-size scratch buffers of the blurs, kept between calls: a fresh 4 MB buffer per blur costs
+// more in page faults and zeroing than the blur's arithmetic. Thread-safe (a caller may run on
+// any thread, and nested parallel loops may start another blur while one waits); contents never
+// carry over (every value is written before it is read), so results do not depend on reuse.
+class ScratchBuffer {
+public:
+    explicit ScratchBuffer(std::size_t size) {
+        {
+            std::lock_guard<std::mutex> lock(pool_mutex());
+            if (!pool().empty()) {
+                m_values = std::move(pool().back());
+                pool().pop_back();
+            }
+        }
+        if (m_values.size() < size) m_values.resize(size);
+    }
+    ~ScratchBuffer() {
+        std::lock_guard<std::mutex> lock(pool_mutex());
+        if (pool().size() < kKept) pool().push_back(std::move(m_values));
+    }
+    ScratchBuffer(const ScratchBuffer&) = delete;
+    ScratchBuffer& operator=(const ScratchBuffer&) = delete;
+    float* data() { return m_values.data(); }
+
+private:
+    static constexpr std::size_t kKept = 4;  // enough for the images refined in parallel
+    static std::vector<std::vector<float>>& pool() {
+        static std::vector<std::vector<float>> buffers;
+        return buffers;
+    }
+    static std::mutex& pool_mutex() {
+        static std::mutex mutex;
+        return mutex;
+    }
+    std::vector<float> m_values;
+};
+
 // The source pixels and weights one axis of resize_bilinear() reads for each output coordinate.
 struct BilinearTaps {
     std::vector<int> first, second;  // source indices per output coordinate
@@ -136,7 +174,7 @@ Image gaussian_blur_masked(const Image& image, const Image& mask, float sigma) {
     const int stride = c + 1;  // weighted channels, then the weight
     const std::size_t row = std::size_t(w) * std::size_t(stride);
     // Horizontal pass over the weighted image, built row by row (no full-size weighted copy).
-    std::vector<float> horizontal(row * std::size_t(h));
+    ScratchBuffer horizontal(row * std::size_t(h));
     parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
         std::vector<float> padded(std::size_t(w + 2 * radius) * std::size_t(stride));
         for (std::size_t y = y0; y < y1; ++y) {
@@ -193,7 +231,7 @@ Image gaussian_blur_resized(const Image& image, const Image& mask, float sigma, 
 
     // Horizontal pass at the needed columns of the needed rows.
     const std::size_t hrow = cols.size() * std::size_t(stride);
-    std::vector<float> horizontal(hrow * std::size_t(h));
+    ScratchBuffer horizontal(hrow * std::size_t(h));
     parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
         std::vector<float> padded(std::size_t(w + 2 * radius) * std::size_t(stride));
         for (std::size_t y = y0; y < y1; ++y) {
