@@ -62,12 +62,13 @@ Image rotate_normal_map(const Image& source, float angle, bool mirrored = false)
     const auto row = [&](int y) { return source.data() + std::size_t(mirrored ? sh - 1 - y : y) * std::size_t(sw) * 3; };
     const float flip = mirrored ? -1.0f : 1.0f;
     Image out(width, height, 3);
-    parallel_for(std::size_t(height), 16, [&](std::size_t y_begin, std::size_t y_end) {
-    for (int y = int(y_begin); y < int(y_end); ++y) {
+    // Tiles, so the source pixels a tile reads (a turned square) stay in the L1 cache.
+    parallel_for_tiles(width, height, 32, [&](int x_begin, int y_begin, int x_end, int y_end) {
+    for (int y = y_begin; y < y_end; ++y) {
         const float v = cy - float(y);
         const float sv = s * v, cv = c * v;
-        float* dst = out.pixel(0, y);
-        for (int x = 0; x < width; ++x, dst += 3) {
+        float* dst = out.pixel(x_begin, y);
+        for (int x = x_begin; x < x_end; ++x, dst += 3) {
             // y-up offsets from the centre, rotated back by -angle into the source.
             const float u = float(x) - cx;
             float sx = c * u + sv + cx_src;
@@ -368,23 +369,34 @@ private:
 /// bits, which order like the values: 3 linear passes instead of N log N comparisons. Anything
 /// else (negative, -0, not finite) falls back to std::sort.
 void sort_non_negative(std::vector<float>& values) {
-    std::vector<std::uint32_t> keys(values.size());
-    for (std::size_t i = 0; i < values.size(); ++i) {
-        std::memcpy(&keys[i], &values[i], sizeof(float));
-        if (keys[i] >= 0x7f800000u) {
-            std::sort(values.begin(), values.end());
-            return;
-        }
+    static_assert(sizeof(float) == sizeof(std::uint32_t));
+    std::uint32_t bad = 0;
+    for (const float v : values) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &v, sizeof(bits));
+        bad |= std::uint32_t(bits >= 0x7f800000u);
     }
-    std::vector<std::uint32_t> swap(keys.size());
+    if (bad) {
+        std::sort(values.begin(), values.end());
+        return;
+    }
+    // Three passes of 11 bits (an odd number: the result ends in `swap`, moved back at the end).
+    std::vector<float> swap(values.size());
+    std::vector<float>* from = &values;
+    std::vector<float>* to = &swap;
     for (const int shift : {0, 11, 22}) {
         std::vector<std::size_t> start(2049, 0);
-        for (const std::uint32_t k : keys) ++start[((k >> shift) & 2047u) + 1];
+        const auto digit = [shift](float v) {
+            std::uint32_t bits;
+            std::memcpy(&bits, &v, sizeof(bits));
+            return (bits >> shift) & 2047u;
+        };
+        for (const float v : *from) ++start[digit(v) + 1];
         for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
-        for (const std::uint32_t k : keys) swap[start[(k >> shift) & 2047u]++] = k;
-        keys.swap(swap);
+        for (const float v : *from) (*to)[start[digit(v)]++] = v;
+        std::swap(from, to);
     }
-    for (std::size_t i = 0; i < values.size(); ++i) std::memcpy(&values[i], &keys[i], sizeof(float));
+    values.swap(swap);
 }
 
 /// Sorted tilts (angle from +z, radians) of every texel of level `level` of the variants.
@@ -777,7 +789,9 @@ Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, st
     // the input.
     if (shrink)
         for (std::size_t i = 0; i < refined.values().size(); ++i) refined.values()[i] -= work.values()[i];
-    Image out = input;
+    // Written over `detail` (each pixel reads only its own value first), which is the input on
+    // the background already: no second full-size image.
+    Image& out = detail;
     const float sx = float(work_width) / float(width), sy = float(work_height) / float(height);
     parallel_for(std::size_t(height), row_grain, [&](std::size_t y0, std::size_t y1) {
         for (int y = int(y0); y < int(y1); ++y) {
@@ -795,7 +809,7 @@ Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, st
                     const int ix = std::min(int(fx), work_width - 1);
                     const int ix1 = std::min(ix + 1, work_width - 1);
                     const float tx = fx - float(ix);
-                    const float* d = detail.data() + 3 * p;
+                    const float* d = detail.data() + 3 * p;  // read before it is overwritten below
                     for (int ch = 0; ch < 3; ++ch) {
                         const float top = refined.at(ix, iy, ch) * (1 - tx) + refined.at(ix1, iy, ch) * tx;
                         const float bottom = refined.at(ix, iy1, ch) * (1 - tx) + refined.at(ix1, iy1, ch) * tx;
