@@ -5,8 +5,8 @@
 /// the touched exemplars, so the learned normals are pulled toward the statistics of what was
 /// touched, which is the role TextureDreambooth plays in the reference (spec 5.5).
 ///
-/// Per image of the request (parallel over pixels; deterministic for a seed and independent of
-/// the thread count):
+/// Per image of the request (the images in parallel, each parallel over pixels; deterministic
+/// for a seed and independent of the thread count):
 ///  1. Relief: with the request's surface frames (GuidanceRequest::surface_normals/tangents,
 ///     which tdf's optimizer provides), every normal is turned by the shortest rotation that
 ///     stands its surface normal upright, so the surface's curvature across the patch is not
@@ -20,7 +20,10 @@
 ///     texels do in the image (`exemplar_scale: auto` takes GuidanceRequest::pixels_per_texel).
 ///     Magnified more than 2x an exemplar's patches are smooth ramps that match anything, so
 ///     beyond that the image is searched as a coarser copy (at least three patches wide) and
-///     the change the search makes there is added back to the full-size image.
+///     the change the search makes there is added back to the full-size image. The copy is
+///     prefiltered with a mask-weighted Gaussian of sigma 0.5 / shrink evaluated only at the
+///     pixels the copy reads (gaussian_blur_resized), so its cost is a small fraction of a
+///     full-size blur.
 ///  3. Synthesis (Kwatra et al.'s EM with a PatchMatch search and Kopf et al. 2007's histogram
 ///     matching): pyramids of `levels` levels (levels smaller than two patches are dropped).
 ///     The coarsest level starts from the image with a random nearest-neighbour field (NNF);
@@ -44,8 +47,10 @@
 ///
 /// The search is approximate (PatchMatch); content that exists in an exemplar variant is found
 /// exactly (tested with 90-degree rotated crops). Cost grows with the working image's pixels, not
-/// with the exemplar's size (README "Guidance backends" gives the measured times). Memory: the
-/// search variants' pyramids, about 16 bytes x scaled exemplar pixels x variants.
+/// with the exemplar's size, except for turning the (scaled) exemplar for each image and sorting
+/// its tilts, which are linear in the exemplar's pixels (README "Guidance backends" gives the
+/// measured times). Memory: the search variants' pyramids, about 16 bytes x scaled exemplar
+/// pixels x variants (surface variants: per image being refined).
 #include <tdf/guidance/guidance_backend.h>
 
 #include <cstdint>
