@@ -67,7 +67,13 @@ void BM_ExemplarPatchMatch(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(backend.refine(request));
     state.SetItemsProcessed(state.iterations() * size * size);
 }
-BENCHMARK(BM_ExemplarPatchMatch)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_ExemplarPatchMatch)
+    ->Arg(128)
+    ->Arg(256)
+    ->Arg(512)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 void BM_ReliefShading(benchmark::State& state) {
     const int size = int(state.range(0));
@@ -85,8 +91,8 @@ BENCHMARK(BM_ReliefShading)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTim
 
 // ---- One refinement iteration at the main job's sizes --------------------------------------
 
-constexpr int kSize = 512;             // patch_resolution and resolution of the main job
-constexpr int kImages = 4;             // patch_batch_size and batch_size
+constexpr int kSize = 512;                // patch_resolution and resolution of the main job
+constexpr int kImages = 4;                // patch_batch_size and batch_size
 constexpr float kPixelsPerTexel = 38.6f;  // logged by `tdf optimize` on scenes/pebble_sphere
 
 /// The main job's tactile map (scenes/pebble_sphere/tactile_normal.png, 256x256).
@@ -96,7 +102,8 @@ Image scene_tactile_map() {
 
 /// Rodrigues rotation of v about the unit `axis` by `angle`.
 Vec3f rotate_about(Vec3f v, Vec3f axis, float angle) {
-    return v * std::cos(angle) + cross(axis, v) * std::sin(angle) + axis * (dot(axis, v) * (1.0f - std::cos(angle)));
+    return v * std::cos(angle) + cross(axis, v) * std::sin(angle) +
+           axis * (dot(axis, v) * (1.0f - std::cos(angle)));
 }
 
 /// Bilinear lookup of a tangent-space map at texel coordinates (wrapping, as a tiled map).
@@ -128,18 +135,22 @@ GuidanceRequest tactile_iteration_request(const Image& map) {
         const float turn = 0.7f + 1.3f * float(k);
         const float handedness = k == 2 ? -1.0f : 1.0f;
         const float ct = std::cos(turn), st = std::sin(turn);
-        Image normals(kSize, kSize, 3), mask(kSize, kSize, 1), base(kSize, kSize, 3), tangents(kSize, kSize, 4);
+        Image normals(kSize, kSize, 3), mask(kSize, kSize, 1), base(kSize, kSize, 3),
+            tangents(kSize, kSize, 4);
         for (int y = 0; y < kSize; ++y)
             for (int x = 0; x < kSize; ++x) {
                 const std::size_t p = std::size_t(y) * kSize + std::size_t(x);
-                const float cover = k == kImages - 1 ? std::clamp(0.7f * float(kSize) - float(x), 0.0f, 1.0f) : 1.0f;
+                const float cover =
+                    k == kImages - 1 ? std::clamp(0.7f * float(kSize) - float(x), 0.0f, 1.0f) : 1.0f;
                 mask.data()[p] = cover;
                 if (cover <= 0.0f) continue;  // background: zero vectors, as the renders have
-                const Vec3f a = safe_normalize(Vec3f((float(x) - c) / 1600.0f, (c - float(y)) / 1600.0f, 1.0f));
+                const Vec3f a =
+                    safe_normalize(Vec3f((float(x) - c) / 1600.0f, (c - float(y)) / 1600.0f, 1.0f));
                 const Vec3f axis = safe_normalize(cross(Vec3f(0, 0, 1), a));
                 const float tilt = std::acos(std::clamp(a.z, -1.0f, 1.0f));
                 // Texel coordinates of this pixel: the map turned by `turn`, mirrored on k == 2.
-                const float u = (ct * (float(x) - c) + st * (c - float(y))) / kPixelsPerTexel + 37.0f * float(k);
+                const float u =
+                    (ct * (float(x) - c) + st * (c - float(y))) / kPixelsPerTexel + 37.0f * float(k);
                 const float v = handedness * (-st * (float(x) - c) + ct * (c - float(y))) / kPixelsPerTexel;
                 Vec3f d = sample_wrapped(map, u, -v);
                 d = Vec3f(ct * d.x - st * handedness * d.y, st * d.x + ct * handedness * d.y, d.z);
@@ -183,7 +194,8 @@ GuidanceRequest visual_iteration_request(const Image& map) {
                 const Vec3f n = safe_normalize(a + Vec3f(0.6f * d.x, 0.6f * d.y, 0.0f));
                 std::copy(&n.x, &n.x + 3, normals.data() + 3 * p);
                 const float shade = std::max(0.1f, dot(n, safe_normalize(Vec3f(0.3f, 0.4f, 1.0f))));
-                const float albedo[3] = {0.55f + 0.2f * std::sin(0.05f * float(x)), 0.45f, 0.35f + 0.1f * float(k)};
+                const float albedo[3] = {
+                    0.55f + 0.2f * std::sin(0.05f * float(x)), 0.45f, 0.35f + 0.1f * float(k)};
                 for (int ch = 0; ch < 3; ++ch) {
                     const float lit = std::min(1.0f, albedo[ch] * shade);
                     colour.data()[3 * p + std::size_t(ch)] = cover * lit + (1.0f - cover);
@@ -208,7 +220,10 @@ void BM_TactileRefinementIteration(benchmark::State& state) {
     }
     state.SetItemsProcessed(state.iterations() * kImages);
 }
-BENCHMARK(BM_TactileRefinementIteration)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_TactileRefinementIteration)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 void BM_VisualRefinementIteration(benchmark::State& state) {
     auto backend = GuidanceBackend::create("relief_shading", Json::object());
@@ -216,7 +231,10 @@ void BM_VisualRefinementIteration(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(backend->refine(request));
     state.SetItemsProcessed(state.iterations() * kImages);
 }
-BENCHMARK(BM_VisualRefinementIteration)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_VisualRefinementIteration)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 void BM_GuidancePerRefinementIteration(benchmark::State& state) {
     const Image map = scene_tactile_map();
@@ -231,7 +249,10 @@ void BM_GuidancePerRefinementIteration(benchmark::State& state) {
         benchmark::DoNotOptimize(tactile->refine(tactile_request));
     }
 }
-BENCHMARK(BM_GuidancePerRefinementIteration)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_GuidancePerRefinementIteration)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 }  // namespace
 }  // namespace tdf

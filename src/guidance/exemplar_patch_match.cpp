@@ -59,43 +59,45 @@ Image rotate_normal_map(const Image& source, float angle, bool mirrored = false)
     if (!exact) width = height = int(float(std::min(sw, sh)) / (std::abs(c) + std::abs(s)));
     const float cx_src = 0.5f * float(sw - 1), cy_src = 0.5f * float(sh - 1);
     const float cx = 0.5f * float(width - 1), cy = 0.5f * float(height - 1);
-    const auto row = [&](int y) { return source.data() + std::size_t(mirrored ? sh - 1 - y : y) * std::size_t(sw) * 3; };
+    const auto row = [&](int y) {
+        return source.data() + std::size_t(mirrored ? sh - 1 - y : y) * std::size_t(sw) * 3;
+    };
     const float flip = mirrored ? -1.0f : 1.0f;
     Image out(width, height, 3);
     // Tiles, so the source pixels a tile reads (a turned square) stay in the L1 cache.
     parallel_for_tiles(width, height, 32, [&](int x_begin, int y_begin, int x_end, int y_end) {
-    for (int y = y_begin; y < y_end; ++y) {
-        const float v = cy - float(y);
-        const float sv = s * v, cv = c * v;
-        float* dst = out.pixel(x_begin, y);
-        for (int x = x_begin; x < x_end; ++x, dst += 3) {
-            // y-up offsets from the centre, rotated back by -angle into the source.
-            const float u = float(x) - cx;
-            float sx = c * u + sv + cx_src;
-            float sy = cy_src - (-s * u + cv);
-            if (exact) sx = std::round(sx), sy = std::round(sy);
-            sx = std::clamp(sx, 0.0f, float(sw - 1));
-            sy = std::clamp(sy, 0.0f, float(sh - 1));
-            const int x0 = int(sx), y0 = int(sy);
-            const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
-            const float tx = sx - float(x0), ty = sy - float(y0);
-            const float* r0 = row(y0);
-            const float* r1 = row(y1);
-            const float* p00 = r0 + 3 * x0;
-            const float* p10 = r0 + 3 * x1;
-            const float* p01 = r1 + 3 * x0;
-            const float* p11 = r1 + 3 * x1;
-            float n[3];
-            for (int ch = 0; ch < 3; ++ch) {
-                // y components of a mirrored source are read negated (an exact sign flip).
-                const float f = ch == 1 ? flip : 1.0f;
-                n[ch] = ((f * p00[ch]) * (1 - tx) + (f * p10[ch]) * tx) * (1 - ty) +
-                        ((f * p01[ch]) * (1 - tx) + (f * p11[ch]) * tx) * ty;
+        for (int y = y_begin; y < y_end; ++y) {
+            const float v = cy - float(y);
+            const float sv = s * v, cv = c * v;
+            float* dst = out.pixel(x_begin, y);
+            for (int x = x_begin; x < x_end; ++x, dst += 3) {
+                // y-up offsets from the centre, rotated back by -angle into the source.
+                const float u = float(x) - cx;
+                float sx = c * u + sv + cx_src;
+                float sy = cy_src - (-s * u + cv);
+                if (exact) sx = std::round(sx), sy = std::round(sy);
+                sx = std::clamp(sx, 0.0f, float(sw - 1));
+                sy = std::clamp(sy, 0.0f, float(sh - 1));
+                const int x0 = int(sx), y0 = int(sy);
+                const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
+                const float tx = sx - float(x0), ty = sy - float(y0);
+                const float* r0 = row(y0);
+                const float* r1 = row(y1);
+                const float* p00 = r0 + 3 * x0;
+                const float* p10 = r0 + 3 * x1;
+                const float* p01 = r1 + 3 * x0;
+                const float* p11 = r1 + 3 * x1;
+                float n[3];
+                for (int ch = 0; ch < 3; ++ch) {
+                    // y components of a mirrored source are read negated (an exact sign flip).
+                    const float f = ch == 1 ? flip : 1.0f;
+                    n[ch] = ((f * p00[ch]) * (1 - tx) + (f * p10[ch]) * tx) * (1 - ty) +
+                            ((f * p01[ch]) * (1 - tx) + (f * p11[ch]) * tx) * ty;
+                }
+                const Vec3f r = safe_normalize(Vec3f(c * n[0] - s * n[1], s * n[0] + c * n[1], n[2]));
+                dst[0] = r.x, dst[1] = r.y, dst[2] = r.z;
             }
-            const Vec3f r = safe_normalize(Vec3f(c * n[0] - s * n[1], s * n[0] + c * n[1], n[2]));
-            dst[0] = r.x, dst[1] = r.y, dst[2] = r.z;
         }
-    }
     });
     return out;
 }
@@ -620,7 +622,8 @@ const std::vector<ExemplarPatchMatchBackend::Variant>& ExemplarPatchMatchBackend
     return m_search_variants;
 }
 
-std::vector<std::vector<float>> ExemplarPatchMatchBackend::tilt_tables(const std::vector<Variant>& variants) const {
+std::vector<std::vector<float>> ExemplarPatchMatchBackend::tilt_tables(
+    const std::vector<Variant>& variants) const {
     // Per level; every variant of a set has the same number of levels (each is at least two
     // patches wide, and the rotated exemplars of a set have one size).
     std::size_t levels = variants.empty() ? 0 : variants.front().levels.size();
@@ -739,9 +742,13 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
                 oriented = surface_variants(request, item, *scaled, scale.exemplar_factor);
                 oriented_tilts = tilt_tables(oriented);
             }
-            result.refined[item] = refine_image(request, item, use_surface ? oriented : *searched,
-                                                use_surface ? oriented_tilts : m_search_tilts, use_surface,
-                                                scale.width, scale.height);
+            result.refined[item] = refine_image(request,
+                                                item,
+                                                use_surface ? oriented : *searched,
+                                                use_surface ? oriented_tilts : m_search_tilts,
+                                                use_surface,
+                                                scale.width,
+                                                scale.height);
         }
     });
     return result;
@@ -780,7 +787,8 @@ Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, st
         work_mask = resample_prefiltered(mask, Image(), work_width, work_height, ratio);
         normalize_vectors(work);
     }
-    Image refined = synthesize(shrink ? work : detail, shrink ? work_mask : mask, variants, tilts, request.seed, item);
+    Image refined =
+        synthesize(shrink ? work : detail, shrink ? work_mask : mask, variants, tilts, request.seed, item);
 
     // Back to full size: with a coarse copy, as a change (the image keeps its own detail finer
     // than the working copy resolves and gains the exemplar's structure at the texel scale),
@@ -812,7 +820,8 @@ Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, st
                     const float* d = detail.data() + 3 * p;  // read before it is overwritten below
                     for (int ch = 0; ch < 3; ++ch) {
                         const float top = refined.at(ix, iy, ch) * (1 - tx) + refined.at(ix1, iy, ch) * tx;
-                        const float bottom = refined.at(ix, iy1, ch) * (1 - tx) + refined.at(ix1, iy1, ch) * tx;
+                        const float bottom =
+                            refined.at(ix, iy1, ch) * (1 - tx) + refined.at(ix1, iy1, ch) * tx;
                         r[ch] = d[ch] + (top * (1 - ty) + bottom * ty);
                     }
                 } else {
@@ -832,7 +841,8 @@ Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, st
 }
 
 std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surface_variants(
-    const GuidanceRequest& request, std::size_t item, const std::vector<Image>& scaled_exemplars, float factor) const {
+    const GuidanceRequest& request, std::size_t item, const std::vector<Image>& scaled_exemplars,
+    float factor) const {
     // The map's orientation in the image: the coverage-weighted mean of the stood-up tangents
     // (u axis) and the majority handedness.
     const Image& mask = request.masks[item];
@@ -855,8 +865,8 @@ std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surfa
     if (std::abs(angle - quarter) < 1e-3f) angle = quarter;
     std::vector<Variant> variants;
     for (const Image& scaled : scaled_exemplars)
-        variants.push_back(build_variant(rotate_normal_map(scaled, angle, handedness < 0.0), m_options.levels,
-                                         m_options.patch_size));
+        variants.push_back(build_variant(
+            rotate_normal_map(scaled, angle, handedness < 0.0), m_options.levels, m_options.patch_size));
     check_variants(variants, factor);
     return variants;
 }

@@ -56,7 +56,8 @@ void weighted_sum(const float* const* sources, const float* kernel, std::size_t 
 
 // One horizontal pass over one row: `padded` holds the row's values with `radius` clamped pixels
 // added at each end ((width + 2 radius) * channels floats), `out` receives width * channels.
-void convolve_row(const float* padded, const std::vector<float>& kernel, int count, int channels, float* out) {
+void convolve_row(const float* padded, const std::vector<float>& kernel, int count, int channels,
+                  float* out) {
     std::vector<const float*> sources(kernel.size());
     for (std::size_t k = 0; k < kernel.size(); ++k) sources[k] = padded + k * std::size_t(channels);
     weighted_sum(sources.data(), kernel.data(), kernel.size(), std::size_t(count), out);
@@ -87,7 +88,9 @@ void weighted_padded_row(const Image& image, const Image& mask, int y, int radiu
     // Clamped borders: copies of the first and last pixel.
     for (int i = 0; i < radius; ++i) {
         std::copy_n(padded + std::size_t(radius) * stride, stride, padded + std::size_t(i) * stride);
-        std::copy_n(padded + std::size_t(radius + w - 1) * stride, stride, padded + std::size_t(radius + w + i) * stride);
+        std::copy_n(padded + std::size_t(radius + w - 1) * stride,
+                    stride,
+                    padded + std::size_t(radius + w + i) * stride);
     }
 }
 
@@ -105,7 +108,8 @@ void taps(const float* src, const std::vector<float>& kernel, float* dst) {
 void taps_any(const float* src, const std::vector<float>& kernel, int channels, float* dst) {
     std::fill(dst, dst + channels, 0.0f);
     for (std::size_t k = 0; k < kernel.size(); ++k)
-        for (int ch = 0; ch < channels; ++ch) dst[ch] += kernel[k] * src[k * std::size_t(channels) + std::size_t(ch)];
+        for (int ch = 0; ch < channels; ++ch)
+            dst[ch] += kernel[k] * src[k * std::size_t(channels) + std::size_t(ch)];
 }
 
 // Full-size scratch buffers of the blurs, kept between calls: a fresh 4 MB buffer per blur costs
@@ -189,7 +193,8 @@ Image gaussian_blur_masked(const Image& image, const Image& mask, float sigma) {
         std::vector<const float*> sources(kernel.size());
         for (int y = int(y0); y < int(y1); ++y) {
             for (int k = -radius; k <= radius; ++k)
-                sources[std::size_t(k + radius)] = horizontal.data() + std::size_t(std::clamp(y + k, 0, h - 1)) * row;
+                sources[std::size_t(k + radius)] =
+                    horizontal.data() + std::size_t(std::clamp(y + k, 0, h - 1)) * row;
             weighted_sum(sources.data(), kernel.data(), kernel.size(), row, sum.data());
             for (int x = 0; x < w; ++x) {
                 const float* s = sum.data() + std::size_t(x) * std::size_t(stride);
@@ -259,29 +264,37 @@ Image gaussian_blur_resized(const Image& image, const Image& mask, float sigma, 
                 std::fill(sum.begin(), sum.end(), 0.0f);
                 for (int k = -radius; k <= radius; ++k) {
                     const float weight = kernel[std::size_t(k + radius)];
-                    const float* src =
-                        horizontal.data() + std::size_t(std::clamp(rows[i] + k, 0, h - 1)) * hrow + j * std::size_t(stride);
+                    const float* src = horizontal.data() +
+                                       std::size_t(std::clamp(rows[i] + k, 0, h - 1)) * hrow +
+                                       j * std::size_t(stride);
                     for (int ch = 0; ch < stride; ++ch) sum[std::size_t(ch)] += weight * src[ch];
                 }
                 float* dst = blurred.data() + i * brow + j * std::size_t(c);
                 const float* keep = image.pixel(cols[j], rows[i]);
-                for (int ch = 0; ch < c; ++ch) dst[ch] = sum[std::size_t(c)] <= 0.0f ? keep[ch] : sum[std::size_t(ch)] / sum[std::size_t(c)];
+                for (int ch = 0; ch < c; ++ch)
+                    dst[ch] =
+                        sum[std::size_t(c)] <= 0.0f ? keep[ch] : sum[std::size_t(ch)] / sum[std::size_t(c)];
             }
     });
     // Bilinear lookup, the arithmetic of resize_bilinear().
     Image out(width, height, c);
     for (int y = 0; y < height; ++y) {
-        const float* top_row = blurred.data() + std::size_t(row_slot[std::size_t(ty.first[std::size_t(y)])]) * brow;
-        const float* bottom_row = blurred.data() + std::size_t(row_slot[std::size_t(ty.second[std::size_t(y)])]) * brow;
+        const float* top_row =
+            blurred.data() + std::size_t(row_slot[std::size_t(ty.first[std::size_t(y)])]) * brow;
+        const float* bottom_row =
+            blurred.data() + std::size_t(row_slot[std::size_t(ty.second[std::size_t(y)])]) * brow;
         const float wy = ty.t[std::size_t(y)];
         for (int x = 0; x < width; ++x) {
-            const std::size_t a = std::size_t(col_slot[std::size_t(tx.first[std::size_t(x)])]) * std::size_t(c);
-            const std::size_t b = std::size_t(col_slot[std::size_t(tx.second[std::size_t(x)])]) * std::size_t(c);
+            const std::size_t a =
+                std::size_t(col_slot[std::size_t(tx.first[std::size_t(x)])]) * std::size_t(c);
+            const std::size_t b =
+                std::size_t(col_slot[std::size_t(tx.second[std::size_t(x)])]) * std::size_t(c);
             const float wx = tx.t[std::size_t(x)];
             float* dst = out.pixel(x, y);
             for (int ch = 0; ch < c; ++ch) {
                 const float top = top_row[a + std::size_t(ch)] * (1 - wx) + top_row[b + std::size_t(ch)] * wx;
-                const float bottom = bottom_row[a + std::size_t(ch)] * (1 - wx) + bottom_row[b + std::size_t(ch)] * wx;
+                const float bottom =
+                    bottom_row[a + std::size_t(ch)] * (1 - wx) + bottom_row[b + std::size_t(ch)] * wx;
                 dst[ch] = top * (1 - wy) + bottom * wy;
             }
         }

@@ -69,9 +69,7 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
     const float f = float(denoise_fraction(request.strength));
     GuidanceResult result;
     result.refined.resize(request.images.size());
-    // The images are independent: refined in parallel (each also parallel inside its blurs).
-    parallel_for(request.images.size(), 1, [&](std::size_t first, std::size_t last) {
-    for (std::size_t item = first; item < last; ++item) {
+    const auto refine_item = [&](std::size_t item) {
         const Image& colour = request.images[item];
         const Image& mask = request.masks[item];
         const Image curvature =
@@ -123,7 +121,10 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
             }
         }
         result.refined[item] = std::move(out);
-    }
+    };
+    // The images are independent: refined in parallel (each also parallel inside its blurs).
+    parallel_for(request.images.size(), 1, [&](std::size_t first, std::size_t last) {
+        for (std::size_t item = first; item < last; ++item) refine_item(item);
     });
     return result;
 }

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace tdf {
 namespace {
@@ -40,7 +41,8 @@ Image reference_blur(const Image& image, const Image& mask, float sigma) {
     const int w = image.width(), h = image.height(), c = image.channels();
     const int radius = int(std::ceil(3.0f * sigma));
     std::vector<float> kernel;
-    for (int i = -radius; i <= radius; ++i) kernel.push_back(std::exp(-0.5f * float(i * i) / (sigma * sigma)));
+    for (int i = -radius; i <= radius; ++i)
+        kernel.push_back(std::exp(-0.5f * float(i * i) / (sigma * sigma)));
     Image weighted(w, h, c + 1), horizontal(w, h, c + 1), vertical(w, h, c + 1);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
@@ -52,17 +54,20 @@ Image reference_blur(const Image& image, const Image& mask, float sigma) {
         for (int x = 0; x < w; ++x)
             for (int k = -radius; k <= radius; ++k)
                 for (int ch = 0; ch <= c; ++ch)
-                    horizontal.at(x, y, ch) += kernel[std::size_t(k + radius)] * weighted.at(std::clamp(x + k, 0, w - 1), y, ch);
+                    horizontal.at(x, y, ch) +=
+                        kernel[std::size_t(k + radius)] * weighted.at(std::clamp(x + k, 0, w - 1), y, ch);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
             for (int k = -radius; k <= radius; ++k)
                 for (int ch = 0; ch <= c; ++ch)
-                    vertical.at(x, y, ch) += kernel[std::size_t(k + radius)] * horizontal.at(x, std::clamp(y + k, 0, h - 1), ch);
+                    vertical.at(x, y, ch) +=
+                        kernel[std::size_t(k + radius)] * horizontal.at(x, std::clamp(y + k, 0, h - 1), ch);
     Image out = image;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
             if (vertical.at(x, y, c) > 0.0f)
-                for (int ch = 0; ch < c; ++ch) out.at(x, y, ch) = vertical.at(x, y, ch) / vertical.at(x, y, c);
+                for (int ch = 0; ch < c; ++ch)
+                    out.at(x, y, ch) = vertical.at(x, y, ch) / vertical.at(x, y, c);
     return out;
 }
 
@@ -95,10 +100,19 @@ TEST(GuidanceImageFilters, GaussianBlurEqualsThePlainSeparableConvolution) {
         for (const float sigma : {1.0f, 3.0f, 9.5f}) {
             const Image image = random_image(53, 37, channels, 7);
             const Image mask = test_mask(53, 37);
-            const Difference masked = compare(gaussian_blur_masked(image, mask, sigma), reference_blur(image, mask, sigma));
-            const Difference plain = compare(gaussian_blur_masked(image, Image(), sigma), reference_blur(image, Image(), sigma));
-            std::printf("blur %d channel(s), sigma %.1f: max error %.3g (PSNR %.1f dB) masked, %.3g (%.1f dB) unmasked\n",
-                        channels, double(sigma), masked.max_error, masked.psnr, plain.max_error, plain.psnr);
+            const Difference masked =
+                compare(gaussian_blur_masked(image, mask, sigma), reference_blur(image, mask, sigma));
+            const Difference plain =
+                compare(gaussian_blur_masked(image, Image(), sigma), reference_blur(image, Image(), sigma));
+            std::printf(
+                "blur %d channel(s), sigma %.1f: max error %.3g (PSNR %.1f dB) masked, %.3g (%.1f dB) "
+                "unmasked\n",
+                channels,
+                double(sigma),
+                masked.max_error,
+                masked.psnr,
+                plain.max_error,
+                plain.psnr);
             EXPECT_LE(masked.max_error, 1e-6);
             EXPECT_LE(plain.max_error, 1e-6);
         }
@@ -112,17 +126,29 @@ TEST(GuidanceImageFilters, BlurAtTheResizedPixelsEqualsBlurThenResize) {
     };
     // The main job's coarse copy (512 -> 27, sigma 0.5 / scale), a non-square shrink, a mild
     // one, a magnification (sigma still applied) and no blur at all.
-    const Case cases[] = {{512, 512, 27, 27, 9.48f}, {130, 90, 17, 11, 3.8f}, {64, 64, 48, 48, 0.67f},
-                          {20, 20, 50, 50, 1.0f},    {40, 30, 13, 9, 0.0f}};
+    const Case cases[] = {{512, 512, 27, 27, 9.48f},
+                          {130, 90, 17, 11, 3.8f},
+                          {64, 64, 48, 48, 0.67f},
+                          {20, 20, 50, 50, 1.0f},
+                          {40, 30, 13, 9, 0.0f}};
     for (const Case& c : cases) {
         const Image image = random_image(c.width, c.height, 3, 11);
         const Image mask = test_mask(c.width, c.height);
         for (const bool use_mask : {true, false}) {
             const Image& m = use_mask ? mask : Image();
-            const Image expected = resize_bilinear(gaussian_blur_masked(image, m, c.sigma), c.out_width, c.out_height);
-            const Difference d = compare(gaussian_blur_resized(image, m, c.sigma, c.out_width, c.out_height), expected);
-            std::printf("%dx%d -> %dx%d, sigma %.2f, %s: max error %.3g (PSNR %.1f dB)\n", c.width, c.height,
-                        c.out_width, c.out_height, double(c.sigma), use_mask ? "masked" : "unmasked", d.max_error, d.psnr);
+            const Image expected =
+                resize_bilinear(gaussian_blur_masked(image, m, c.sigma), c.out_width, c.out_height);
+            const Difference d =
+                compare(gaussian_blur_resized(image, m, c.sigma, c.out_width, c.out_height), expected);
+            std::printf("%dx%d -> %dx%d, sigma %.2f, %s: max error %.3g (PSNR %.1f dB)\n",
+                        c.width,
+                        c.height,
+                        c.out_width,
+                        c.out_height,
+                        double(c.sigma),
+                        use_mask ? "masked" : "unmasked",
+                        d.max_error,
+                        d.psnr);
             EXPECT_LE(d.max_error, 1e-6);
         }
     }

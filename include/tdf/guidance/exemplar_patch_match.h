@@ -148,7 +148,8 @@ private:
     /// Steps 3 of the algorithm on one (working) image: the refined unit normals. `tilts`:
     /// tilt_tables(variants).
     Image synthesize(const Image& input, const Image& mask, const std::vector<Variant>& variants,
-                     const std::vector<std::vector<float>>& tilts, std::uint64_t seed, std::size_t item) const;
+                     const std::vector<std::vector<float>>& tilts, std::uint64_t seed,
+                     std::size_t item) const;
 
     Options m_options;
     std::vector<Image> m_exemplars;  ///< unit tangent-space normals, as given
