@@ -129,6 +129,7 @@ public:
         if (m_values.size() < size) m_values.resize(size);
     }
     ~ScratchBuffer() {
+        if (m_values.size() > kLargestKept) return;  // a rare huge image: given back to the system
         std::lock_guard<std::mutex> lock(pool_mutex());
         if (pool().size() < kKept) pool().push_back(std::move(m_values));
     }
@@ -137,7 +138,10 @@ public:
     float* data() { return m_values.data(); }
 
 private:
-    static constexpr std::size_t kKept = 4;  // enough for the images refined in parallel
+    // Enough for the images refined in parallel; at most 4 x 16 MB stay allocated (4 MB per
+    // buffer in the main job: a 512^2 image with 4 weighted channels).
+    static constexpr std::size_t kKept = 4;
+    static constexpr std::size_t kLargestKept = std::size_t(1) << 22;  // floats
     static std::vector<std::vector<float>>& pool() {
         static std::vector<std::vector<float>> buffers;
         return buffers;
