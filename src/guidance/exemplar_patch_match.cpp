@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace tdf {
@@ -45,38 +46,59 @@ void normalize_vectors(Image& image) {
 /// Rotates a normal map by `angle` counter-clockwise (y up): the picture and the (x, y)
 /// components of its vectors. Multiples of 90 degrees are exact index permutations (sampling
 /// lands on pixel centres); other angles are resampled bilinearly and cropped to the largest
-/// axis-aligned square inside the rotated picture.
-Image rotate_normal_map(const Image& source, float angle) {
+/// axis-aligned square inside the rotated picture. With `mirrored` the source is read as
+/// the map mirrored across the horizontal axis (rows reversed, y negated; both exact), which is
+/// how a tangent-space map appears on a chart of handedness -1 (the bitangent is flipped).
+Image rotate_normal_map(const Image& source, float angle, bool mirrored = false) {
     const float c = std::cos(angle), s = std::sin(angle);
     const int quarter = int(std::lround(angle / (0.5f * kPi)));
     const bool exact = std::abs(angle - float(quarter) * 0.5f * kPi) < 1e-6f;
-    int width = source.width(), height = source.height();
+    const int sw = source.width(), sh = source.height();
+    int width = sw, height = sh;
     if (exact && (quarter & 1)) std::swap(width, height);
-    if (!exact)
-        width = height = int(float(std::min(source.width(), source.height())) / (std::abs(c) + std::abs(s)));
-    const float cx_src = 0.5f * float(source.width() - 1), cy_src = 0.5f * float(source.height() - 1);
+    if (!exact) width = height = int(float(std::min(sw, sh)) / (std::abs(c) + std::abs(s)));
+    const float cx_src = 0.5f * float(sw - 1), cy_src = 0.5f * float(sh - 1);
     const float cx = 0.5f * float(width - 1), cy = 0.5f * float(height - 1);
+    const auto row = [&](int y) {
+        return source.data() + std::size_t(mirrored ? sh - 1 - y : y) * std::size_t(sw) * 3;
+    };
+    const float flip = mirrored ? -1.0f : 1.0f;
     Image out(width, height, 3);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
-            // y-up offsets from the centre, rotated back by -angle into the source.
-            const float u = float(x) - cx, v = cy - float(y);
-            float sx = c * u + s * v + cx_src;
-            float sy = cy_src - (-s * u + c * v);
-            if (exact) sx = std::round(sx), sy = std::round(sy);
-            sx = std::clamp(sx, 0.0f, float(source.width() - 1));
-            sy = std::clamp(sy, 0.0f, float(source.height() - 1));
-            const int x0 = int(sx), y0 = int(sy);
-            const int x1 = std::min(x0 + 1, source.width() - 1), y1 = std::min(y0 + 1, source.height() - 1);
-            const float tx = sx - float(x0), ty = sy - float(y0);
-            Vec3f n;
-            for (int ch = 0; ch < 3; ++ch)
-                n[ch] = (source.at(x0, y0, ch) * (1 - tx) + source.at(x1, y0, ch) * tx) * (1 - ty) +
-                        (source.at(x0, y1, ch) * (1 - tx) + source.at(x1, y1, ch) * tx) * ty;
-            n = safe_normalize(Vec3f(c * n.x - s * n.y, s * n.x + c * n.y, n.z));
-            float* dst = out.pixel(x, y);
-            dst[0] = n.x, dst[1] = n.y, dst[2] = n.z;
+    // Tiles, so the source pixels a tile reads (a turned square) stay in the L1 cache.
+    parallel_for_tiles(width, height, 32, [&](int x_begin, int y_begin, int x_end, int y_end) {
+        for (int y = y_begin; y < y_end; ++y) {
+            const float v = cy - float(y);
+            const float sv = s * v, cv = c * v;
+            float* dst = out.pixel(x_begin, y);
+            for (int x = x_begin; x < x_end; ++x, dst += 3) {
+                // y-up offsets from the centre, rotated back by -angle into the source.
+                const float u = float(x) - cx;
+                float sx = c * u + sv + cx_src;
+                float sy = cy_src - (-s * u + cv);
+                if (exact) sx = std::round(sx), sy = std::round(sy);
+                sx = std::clamp(sx, 0.0f, float(sw - 1));
+                sy = std::clamp(sy, 0.0f, float(sh - 1));
+                const int x0 = int(sx), y0 = int(sy);
+                const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
+                const float tx = sx - float(x0), ty = sy - float(y0);
+                const float* r0 = row(y0);
+                const float* r1 = row(y1);
+                const float* p00 = r0 + 3 * x0;
+                const float* p10 = r0 + 3 * x1;
+                const float* p01 = r1 + 3 * x0;
+                const float* p11 = r1 + 3 * x1;
+                float n[3];
+                for (int ch = 0; ch < 3; ++ch) {
+                    // y components of a mirrored source are read negated (an exact sign flip).
+                    const float f = ch == 1 ? flip : 1.0f;
+                    n[ch] = ((f * p00[ch]) * (1 - tx) + (f * p10[ch]) * tx) * (1 - ty) +
+                            ((f * p01[ch]) * (1 - tx) + (f * p11[ch]) * tx) * ty;
+                }
+                const Vec3f r = safe_normalize(Vec3f(c * n[0] - s * n[1], s * n[0] + c * n[1], n[2]));
+                dst[0] = r.x, dst[1] = r.y, dst[2] = r.z;
+            }
         }
+    });
     return out;
 }
 
@@ -344,6 +366,41 @@ private:
     std::vector<unsigned char> m_active;
 };
 
+/// Sorts finite non-negative floats ascending, as std::sort does (equal values have equal bits
+/// here, so the result is the same array), by a least-significant-digit radix sort of their
+/// bits, which order like the values: 3 linear passes instead of N log N comparisons. Anything
+/// else (negative, -0, not finite) falls back to std::sort.
+void sort_non_negative(std::vector<float>& values) {
+    static_assert(sizeof(float) == sizeof(std::uint32_t));
+    std::uint32_t bad = 0;
+    for (const float v : values) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &v, sizeof(bits));
+        bad |= std::uint32_t(bits >= 0x7f800000u);
+    }
+    if (bad) {
+        std::sort(values.begin(), values.end());
+        return;
+    }
+    // Three passes of 11 bits (an odd number: the result ends in `swap`, moved back at the end).
+    std::vector<float> swap(values.size());
+    std::vector<float>* from = &values;
+    std::vector<float>* to = &swap;
+    for (const int shift : {0, 11, 22}) {
+        std::vector<std::size_t> start(2049, 0);
+        const auto digit = [shift](float v) {
+            std::uint32_t bits;
+            std::memcpy(&bits, &v, sizeof(bits));
+            return (bits >> shift) & 2047u;
+        };
+        for (const float v : *from) ++start[digit(v) + 1];
+        for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+        for (const float v : *from) (*to)[start[digit(v)]++] = v;
+        std::swap(from, to);
+    }
+    values.swap(swap);
+}
+
 /// Sorted tilts (angle from +z, radians) of every texel of level `level` of the variants.
 std::vector<float> sorted_tilts(const std::vector<Variant>& variants, std::size_t level) {
     std::vector<float> tilts;
@@ -352,7 +409,7 @@ std::vector<float> sorted_tilts(const std::vector<Variant>& variants, std::size_
         for (std::size_t p = 0; p < e.pixel_count(); ++p)
             tilts.push_back(std::acos(std::clamp(e.data()[3 * p + 2], -1.0f, 1.0f)));
     }
-    std::sort(tilts.begin(), tilts.end());
+    sort_non_negative(tilts);
     return tilts;
 }
 
@@ -384,19 +441,13 @@ std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
     return z ^ (z >> 31);
 }
 
-/// Mirrored across the horizontal axis: rows reversed and y components negated, which is how a
-/// tangent-space map appears on a chart of handedness -1 (the bitangent is flipped).
-Image mirror_normal_map(const Image& image) {
-    Image out = flip_rows(image);
-    for (std::size_t p = 0; p < out.pixel_count(); ++p) out.data()[3 * p + 1] = -out.data()[3 * p + 1];
-    return out;
-}
-
 /// Resamples to width x height, `scale` being the size ratio: shrinking (scale < 1) is
 /// prefiltered with a mask-weighted Gaussian of sigma 0.5 / scale so the coarse copy does not
 /// alias.
 Image resample_prefiltered(const Image& image, const Image& mask, int width, int height, float scale) {
-    return resize_bilinear(scale < 1.0f ? gaussian_blur_masked(image, mask, 0.5f / scale) : image, width, height);
+    // Only the pixels the coarse copy reads are blurred (same numbers as blurring everything).
+    return scale < 1.0f ? gaussian_blur_resized(image, mask, 0.5f / scale, width, height)
+                        : resize_bilinear(image, width, height);
 }
 
 /// Resizes by `factor` (unit vectors in, unit vectors out).
@@ -565,9 +616,22 @@ const std::vector<ExemplarPatchMatchBackend::Variant>& ExemplarPatchMatchBackend
         }
     }
     check_variants(variants, factor);
+    m_search_tilts = tilt_tables(variants);
     m_search_variants = std::move(variants);
     m_search_factor = factor;
     return m_search_variants;
+}
+
+std::vector<std::vector<float>> ExemplarPatchMatchBackend::tilt_tables(
+    const std::vector<Variant>& variants) const {
+    // Per level; every variant of a set has the same number of levels (each is at least two
+    // patches wide, and the rotated exemplars of a set have one size).
+    std::size_t levels = variants.empty() ? 0 : variants.front().levels.size();
+    for (const Variant& v : variants) levels = std::min(levels, v.levels.size());
+    std::vector<std::vector<float>> tilts(levels);
+    if (m_options.match_tilt_histogram)
+        for (std::size_t l = 0; l < levels; ++l) tilts[l] = sorted_tilts(variants, l);
+    return tilts;
 }
 
 void ExemplarPatchMatchBackend::check_variants(const std::vector<Variant>& variants, float factor) const {
@@ -585,7 +649,8 @@ void ExemplarPatchMatchBackend::check_variants(const std::vector<Variant>& varia
 }
 
 Image ExemplarPatchMatchBackend::synthesize(const Image& input, const Image& input_mask,
-                                            const std::vector<Variant>& variants, std::uint64_t seed,
+                                            const std::vector<Variant>& variants,
+                                            const std::vector<std::vector<float>>& tilts, std::uint64_t seed,
                                             std::size_t item) const {
     // Levels usable by every variant and by the image (at least two patches wide).
     const int patch = m_options.patch_size;
@@ -624,7 +689,7 @@ Image ExemplarPatchMatchBackend::synthesize(const Image& input, const Image& inp
             LevelSolver solver(estimate, masks[l], variants, int(l), patch);
             field = solver.upsampled_field(field, coarse_width, coarse_height, mix_seed(seed, item, level_stage + 1023));
         }
-        const std::vector<float> exemplar_tilts = sorted_tilts(variants, l);
+        const std::vector<float>& exemplar_tilts = tilts[l];
         for (int em = 0; em < m_options.em_iterations; ++em) {
             if (m_options.match_tilt_histogram) match_tilt_histogram(estimate, masks[l], exemplar_tilts);
             LevelSolver solver(estimate, masks[l], variants, int(l), patch);
@@ -662,68 +727,122 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
                                                                      : 1.0f;
     const int width = request.images[0].width(), height = request.images[0].height();
     const WorkingScale scale = working_scale(pixels_per_texel, width, height, m_options.patch_size);
-    const bool shrink = scale.width != width || scale.height != height;
 
+    // The cached exemplars are built here, before the images are refined in parallel (each
+    // image is independent and draws from its own seed streams, so the order does not matter).
+    const std::vector<Image>* scaled = use_surface ? &scaled_exemplars(scale.exemplar_factor) : nullptr;
+    const std::vector<Variant>* searched = use_surface ? nullptr : &search_variants(scale.exemplar_factor);
     GuidanceResult result;
-    for (std::size_t item = 0; item < request.images.size(); ++item) {
-        const Image& mask = request.masks[item];
-        // The relief on its own: each normal turned by the rotation that stands its surface
-        // normal upright, so the surface's curvature does not count as texture.
-        Image detail = request.images[item];
-        if (use_surface) {
-            const Image& base = request.surface_normals[item];
-            for (std::size_t p = 0; p < detail.pixel_count(); ++p) {
+    result.refined.resize(request.images.size());
+    parallel_for(request.images.size(), 1, [&](std::size_t i0, std::size_t i1) {
+        for (std::size_t item = i0; item < i1; ++item) {
+            std::vector<Variant> oriented;
+            std::vector<std::vector<float>> oriented_tilts;
+            if (use_surface) {
+                oriented = surface_variants(request, item, *scaled, scale.exemplar_factor);
+                oriented_tilts = tilt_tables(oriented);
+            }
+            result.refined[item] = refine_image(request,
+                                                item,
+                                                use_surface ? oriented : *searched,
+                                                use_surface ? oriented_tilts : m_search_tilts,
+                                                use_surface,
+                                                scale.width,
+                                                scale.height);
+        }
+    });
+    return result;
+}
+
+Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, std::size_t item,
+                                              const std::vector<Variant>& variants,
+                                              const std::vector<std::vector<float>>& tilts, bool use_surface,
+                                              int work_width, int work_height) const {
+    const Image& input = request.images[item];
+    const Image& mask = request.masks[item];
+    const int width = input.width(), height = input.height();
+    const bool shrink = work_width != width || work_height != height;
+    const std::size_t row_grain = 32;
+    // The relief on its own: each normal turned by the rotation that stands its surface
+    // normal upright, so the surface's curvature does not count as texture.
+    Image detail = input;
+    if (use_surface) {
+        const Image& base = request.surface_normals[item];
+        parallel_for(std::size_t(height), row_grain, [&](std::size_t y0, std::size_t y1) {
+            for (std::size_t p = y0 * std::size_t(width); p < y1 * std::size_t(width); ++p) {
                 if (mask.data()[p] <= 0.0f) continue;
                 float* n = detail.data() + 3 * p;
                 const float* a = base.data() + 3 * p;
                 const Vec3f d = shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), safe_normalize(Vec3f(n[0], n[1], n[2])), false);
                 n[0] = d.x, n[1] = d.y, n[2] = d.z;
             }
-        }
-        Image work = detail, work_mask = mask;
-        if (shrink) {
-            const float ratio = float(scale.width) / float(width);
-            work = resample_prefiltered(detail, mask, scale.width, scale.height, ratio);
-            work_mask = resample_prefiltered(mask, Image(), scale.width, scale.height, ratio);
-            normalize_vectors(work);
-        }
-
-        std::vector<Variant> oriented;
-        if (use_surface) oriented = surface_variants(request, item, scale.exemplar_factor);
-        const std::vector<Variant>& variants = use_surface ? oriented : search_variants(scale.exemplar_factor);
-        Image refined = synthesize(work, work_mask, variants, request.seed, item);
-
-        if (shrink) {
-            // Back to full size as a change: the image keeps its own detail finer than the
-            // working copy resolves, and gains the exemplar's structure at the texel scale.
-            Image change = refined;
-            for (std::size_t i = 0; i < change.values().size(); ++i) change.values()[i] -= work.values()[i];
-            const Image up = resize_bilinear(change, width, height);
-            refined = detail;
-            for (std::size_t i = 0; i < refined.values().size(); ++i) refined.values()[i] += up.values()[i];
-        }
-        // Foreground: unit normals (stood back on their surface) times coverage, as the renders
-        // are; background: the input.
-        Image out = request.images[item];
-        for (std::size_t p = 0; p < out.pixel_count(); ++p) {
-            const float m = mask.data()[p];
-            if (m <= 0.0f) continue;
-            const float* r = refined.data() + 3 * p;
-            Vec3f n = safe_normalize(Vec3f(r[0], r[1], r[2]));
-            if (use_surface) {
-                const float* a = request.surface_normals[item].data() + 3 * p;
-                n = safe_normalize(shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), n, true));
-            }
-            float* o = out.data() + 3 * p;
-            o[0] = m * n.x, o[1] = m * n.y, o[2] = m * n.z;
-        }
-        result.refined.push_back(std::move(out));
+        });
     }
-    return result;
+    // The working copy: the image itself, or its prefiltered coarse copy (only the pixels the
+    // copy needs are filtered, no full-size temporaries).
+    Image work, work_mask;
+    if (shrink) {
+        const float ratio = float(work_width) / float(width);
+        work = resample_prefiltered(detail, mask, work_width, work_height, ratio);
+        work_mask = resample_prefiltered(mask, Image(), work_width, work_height, ratio);
+        normalize_vectors(work);
+    }
+    Image refined =
+        synthesize(shrink ? work : detail, shrink ? work_mask : mask, variants, tilts, request.seed, item);
+
+    // Back to full size: with a coarse copy, as a change (the image keeps its own detail finer
+    // than the working copy resolves and gains the exemplar's structure at the texel scale),
+    // upsampled bilinearly on the fly (the arithmetic of resize_bilinear). Foreground: unit
+    // normals (stood back on their surface) times coverage, as the renders are; background:
+    // the input.
+    if (shrink)
+        for (std::size_t i = 0; i < refined.values().size(); ++i) refined.values()[i] -= work.values()[i];
+    // Written over `detail` (each pixel reads only its own value first), which is the input on
+    // the background already: no second full-size image.
+    Image& out = detail;
+    const float sx = float(work_width) / float(width), sy = float(work_height) / float(height);
+    parallel_for(std::size_t(height), row_grain, [&](std::size_t y0, std::size_t y1) {
+        for (int y = int(y0); y < int(y1); ++y) {
+            const float fy = std::clamp((float(y) + 0.5f) * sy - 0.5f, 0.0f, float(work_height - 1));
+            const int iy = std::min(int(fy), work_height - 1);
+            const int iy1 = std::min(iy + 1, work_height - 1);
+            const float ty = fy - float(iy);
+            for (int x = 0; x < width; ++x) {
+                const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                const float m = mask.data()[p];
+                if (m <= 0.0f) continue;
+                float r[3];
+                if (shrink) {
+                    const float fx = std::clamp((float(x) + 0.5f) * sx - 0.5f, 0.0f, float(work_width - 1));
+                    const int ix = std::min(int(fx), work_width - 1);
+                    const int ix1 = std::min(ix + 1, work_width - 1);
+                    const float tx = fx - float(ix);
+                    const float* d = detail.data() + 3 * p;  // read before it is overwritten below
+                    for (int ch = 0; ch < 3; ++ch) {
+                        const float top = refined.at(ix, iy, ch) * (1 - tx) + refined.at(ix1, iy, ch) * tx;
+                        const float bottom =
+                            refined.at(ix, iy1, ch) * (1 - tx) + refined.at(ix1, iy1, ch) * tx;
+                        r[ch] = d[ch] + (top * (1 - ty) + bottom * ty);
+                    }
+                } else {
+                    std::copy_n(refined.data() + 3 * p, 3, r);
+                }
+                Vec3f n = safe_normalize(Vec3f(r[0], r[1], r[2]));
+                if (use_surface) {
+                    const float* a = request.surface_normals[item].data() + 3 * p;
+                    n = safe_normalize(shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), n, true));
+                }
+                float* o = out.data() + 3 * p;
+                o[0] = m * n.x, o[1] = m * n.y, o[2] = m * n.z;
+            }
+        }
+    });
+    return out;
 }
 
 std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surface_variants(
-    const GuidanceRequest& request, std::size_t item, float factor) {
+    const GuidanceRequest& request, std::size_t item, const std::vector<Image>& scaled_exemplars,
+    float factor) const {
     // The map's orientation in the image: the coverage-weighted mean of the stood-up tangents
     // (u axis) and the majority handedness.
     const Image& mask = request.masks[item];
@@ -745,10 +864,9 @@ std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surfa
     const float quarter = std::round(angle / (0.5f * kPi)) * 0.5f * kPi;
     if (std::abs(angle - quarter) < 1e-3f) angle = quarter;
     std::vector<Variant> variants;
-    for (const Image& scaled : scaled_exemplars(factor)) {
-        const Image rotated = rotate_normal_map(handedness < 0.0 ? mirror_normal_map(scaled) : scaled, angle);
-        variants.push_back(build_variant(rotated, m_options.levels, m_options.patch_size));
-    }
+    for (const Image& scaled : scaled_exemplars)
+        variants.push_back(build_variant(
+            rotate_normal_map(scaled, angle, handedness < 0.0), m_options.levels, m_options.patch_size));
     check_variants(variants, factor);
     return variants;
 }

@@ -74,7 +74,8 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
     validate_request(request, "guidance backend 'relief_shading'");
     const float f = float(denoise_fraction(request.strength));
     GuidanceResult result;
-    for (std::size_t item = 0; item < request.images.size(); ++item) {
+    result.refined.resize(request.images.size());
+    const auto refine_item = [&](std::size_t item) {
         const Image& colour = request.images[item];
         const Image& mask = request.masks[item];
         // The relief's own curvature: with the surface normals under it (GuidanceRequest::
@@ -91,6 +92,7 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
         // Normalise by a quantile over the curved foreground pixels only, so sparse relief on a
         // flat surface is not drowned by the zeros; a flat surface has none and stays unchanged.
         std::vector<float> magnitudes;
+        magnitudes.reserve(curvature.pixel_count());
         for (std::size_t p = 0; p < curvature.pixel_count(); ++p) {
             const float magnitude = std::abs(curvature.data()[p]);
             if (mask.data()[p] >= 0.5f && magnitude > kFlatCurvature) magnitudes.push_back(magnitude);
@@ -137,8 +139,12 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
                 dst[c] = std::clamp(m * refined + (1.0f - m) * v, 0.0f, 1.0f);
             }
         }
-        result.refined.push_back(std::move(out));
-    }
+        result.refined[item] = std::move(out);
+    };
+    // The images are independent: refined in parallel (each also parallel inside its blurs).
+    parallel_for(request.images.size(), 1, [&](std::size_t first, std::size_t last) {
+        for (std::size_t item = first; item < last; ++item) refine_item(item);
+    });
     return result;
 }
 

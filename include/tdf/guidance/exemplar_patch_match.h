@@ -5,8 +5,8 @@
 /// the touched exemplars, so the learned normals are pulled toward the statistics of what was
 /// touched, which is the role TextureDreambooth plays in the reference (spec 5.5).
 ///
-/// Per image of the request (parallel over pixels; deterministic for a seed and independent of
-/// the thread count):
+/// Per image of the request (the images in parallel, each parallel over pixels; deterministic
+/// for a seed and independent of the thread count):
 ///  1. Relief: with the request's surface frames (GuidanceRequest::surface_normals/tangents,
 ///     which tdf's optimizer provides), every normal is turned by the shortest rotation that
 ///     stands its surface normal upright, so the surface's curvature across the patch is not
@@ -20,7 +20,10 @@
 ///     texels do in the image (`exemplar_scale: auto` takes GuidanceRequest::pixels_per_texel).
 ///     Magnified more than 2x an exemplar's patches are smooth ramps that match anything, so
 ///     beyond that the image is searched as a coarser copy (at least three patches wide) and
-///     the change the search makes there is added back to the full-size image.
+///     the change the search makes there is added back to the full-size image. The copy is
+///     prefiltered with a mask-weighted Gaussian of sigma 0.5 / shrink evaluated only at the
+///     pixels the copy reads (gaussian_blur_resized), so its cost is a small fraction of a
+///     full-size blur.
 ///  3. Synthesis (Kwatra et al.'s EM with a PatchMatch search and Kopf et al. 2007's histogram
 ///     matching): pyramids of `levels` levels (levels smaller than two patches are dropped).
 ///     The coarsest level starts from the image with a random nearest-neighbour field (NNF);
@@ -44,8 +47,10 @@
 ///
 /// The search is approximate (PatchMatch); content that exists in an exemplar variant is found
 /// exactly (tested with 90-degree rotated crops). Cost grows with the working image's pixels, not
-/// with the exemplar's size (README "Guidance backends" gives the measured times). Memory: the
-/// search variants' pyramids, about 16 bytes x scaled exemplar pixels x variants.
+/// with the exemplar's size, except for turning the (scaled) exemplar for each image and sorting
+/// its tilts, which are linear in the exemplar's pixels (README "Guidance backends" gives the
+/// measured times). Memory: the search variants' pyramids, about 16 bytes x scaled exemplar
+/// pixels x variants (surface variants: per image being refined).
 #include <tdf/guidance/guidance_backend.h>
 
 #include <cstdint>
@@ -126,19 +131,32 @@ private:
     /// The rotation (and flip) variants searched without surface frames, with the exemplars
     /// resampled by `factor`; rebuilt only when the factor changes.
     const std::vector<Variant>& search_variants(float factor);
-    /// One variant per exemplar, turned and mirrored as the map lies in image `item`.
-    std::vector<Variant> surface_variants(const GuidanceRequest& request, std::size_t item, float factor);
+    /// One variant per exemplar (`scaled_exemplars`, resampled by `factor`), turned and mirrored
+    /// as the map lies in image `item`.
+    std::vector<Variant> surface_variants(const GuidanceRequest& request, std::size_t item,
+                                          const std::vector<Image>& scaled_exemplars, float factor) const;
+    /// Steps 1-4 for image `item` of the request, searched against `variants`, at the working
+    /// size work_width x work_height (the image's own size, or the coarse copy's).
+    Image refine_image(const GuidanceRequest& request, std::size_t item, const std::vector<Variant>& variants,
+                       const std::vector<std::vector<float>>& tilts, bool use_surface, int work_width,
+                       int work_height) const;
+    /// The sorted tilts of all texels of `variants`, per pyramid level (the histogram matching's
+    /// target; empty tables when match_tilt_histogram is off).
+    std::vector<std::vector<float>> tilt_tables(const std::vector<Variant>& variants) const;
     /// Throws tdf::Error when a variant is smaller than a patch.
     void check_variants(const std::vector<Variant>& variants, float factor) const;
-    /// Steps 3 of the algorithm on one (working) image: the refined unit normals.
+    /// Steps 3 of the algorithm on one (working) image: the refined unit normals. `tilts`:
+    /// tilt_tables(variants).
     Image synthesize(const Image& input, const Image& mask, const std::vector<Variant>& variants,
-                     std::uint64_t seed, std::size_t item) const;
+                     const std::vector<std::vector<float>>& tilts, std::uint64_t seed,
+                     std::size_t item) const;
 
     Options m_options;
     std::vector<Image> m_exemplars;  ///< unit tangent-space normals, as given
     std::vector<Image> m_scaled_exemplars;
     float m_scaled_factor = 0.0f;
     std::vector<Variant> m_search_variants;
+    std::vector<std::vector<float>> m_search_tilts;  ///< tilt_tables(m_search_variants)
     float m_search_factor = 0.0f;
 };
 
