@@ -26,5 +26,6 @@ Command register_compare(CLI::App& root);
 Command register_tactile(CLI::App& root);
 Command register_atlas(CLI::App& root);
 Command register_optimize(CLI::App& root);
+Command register_parts(CLI::App& root);
 
 }  // namespace tdf::app
