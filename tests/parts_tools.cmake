@@ -13,3 +13,25 @@ if(TARGET tdf_parts_tests)
   add_dependencies(tdf_parts_tests tdf_test_segmenter)
   target_compile_definitions(tdf_parts_tests PRIVATE TDF_TEST_SEGMENTER="$<TARGET_FILE:tdf_test_segmenter>")
 endif()
+
+# `tdf parts` end to end on the shipped two-part scene, and the one-line errors of bad input.
+set(_parts_out ${PROJECT_BINARY_DIR}/test-scratch/parts_cli)
+add_test(NAME PartsCli.TwoPartSphereWritesLabelMapMasksAndReport
+         COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 256)
+set_tests_properties(PartsCli.TwoPartSphereWritesLabelMapMasksAndReport PROPERTIES LABELS unit
+                     PASS_REGULAR_EXPRESSION "0 cap +44\\.[0-9]+ %.*1 base +55\\.[0-9]+ %.*wrote .*two_part_sphere_label_map.png")
+add_test(NAME PartsCli.SceneWithoutPartsFails
+         COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/pebble_sphere/scene.json -o ${_parts_out})
+set_tests_properties(PartsCli.SceneWithoutPartsFails PROPERTIES LABELS unit
+                     PASS_REGULAR_EXPRESSION "tdf parts: .*scene.json: the scene has no 'parts' section")
+add_test(NAME PartsCli.BadSelectFails
+         COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 64
+                 parts.source.kind=mesh)
+set_tests_properties(PartsCli.BadSelectFails PROPERTIES LABELS unit
+                     PASS_REGULAR_EXPRESSION "tdf parts: .*parts.list\\[0\\].select: '1' is not a region of the mesh source \\(found: 'cap', 'base'\\)")
+add_test(NAME PartsCli.KLargerThanColoursFails
+         COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 64
+                 parts.source.kind=label_image parts.source.image=label_image.png parts.source.kind=colour
+                 albedo.source=constant parts.source.k=2)
+set_tests_properties(PartsCli.KLargerThanColoursFails PROPERTIES LABELS unit
+                     PASS_REGULAR_EXPRESSION "tdf parts: .*parts.source: k is 2 but the albedo has only 1 distinct colour")

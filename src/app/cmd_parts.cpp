@@ -99,7 +99,7 @@ int run_parts(const PartsCommandOptions& o) {
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         Json scales = Json::array();
         for (const PartTactile& t : tactile) scales.push_back(t.uv_scale);
-        report["target"] = {{"band_texels", o.band},
+        report["target"] = {{"band_width_texels", o.band},
                             {"uv_scale", scales},
                             {"bleed_texels", m.bleed_texels},
                             {"boundary_step_degrees", m.boundary_step_degrees},

@@ -322,3 +322,32 @@ TEST(PartSegmentation, ShippedTwoPartSceneColourAccuracy) {
     image_spec.parts[1].select = {"#00ff00"};
     EXPECT_GE(texel_accuracy(segment_parts(image_spec, in).texel_part, truth.texel_part), 0.995);
 }
+
+TEST(PartSegmentation, SpotPatchesFromColourOnTheRealMesh) {
+    // scenes/spot_parts: the cow's dark patches from colour alone (K = 6, cluster 2) against an
+    // independent rule on the same texture: texels darker than L* = 36 are patches.
+    TDF_REQUIRE_SHARED_DATA("meshes/spot/spot_triangulated.obj");
+    const std::string scene = test::source_dir() + "/scenes/spot_parts/scene.json";
+    const SceneDescription description = load_scene(scene);
+    const auto assets = load_scene_assets(description);
+    PartSegmentationInput in;
+    in.mesh = in.atlas = &assets->mesh;
+    in.material = &assets->material;
+    in.size = 512;
+    in.where = scene + ": parts";
+    const PartSegmentation seg = segment_parts(description.parts, in);
+    UvRaster raster = rasterize_uv(assets->mesh, 512);
+    add_partial_texels(assets->mesh, raster);
+    std::vector<int> dark(raster.texel_count(), -1);
+    for (std::size_t i = 0; i < dark.size(); ++i)
+        if (raster.triangle[i] >= 0)
+            dark[i] = srgb_to_lab(albedo_at(assets->mesh, assets->material, raster.triangle[i], raster.barycentric[i])).x < 36.f
+                          ? 1
+                          : 0;
+    const double accuracy = texel_accuracy(seg.texel_part, dark);
+    std::printf("spot patches: %.4f of foreground texels agree with the L* < 36 rule, patches %.2f %%, %.2f s\n", accuracy,
+                100.0 * seg.part_fraction[1], seg.seconds);
+    EXPECT_GE(accuracy, 0.98);
+    EXPECT_GT(seg.part_fraction[1], 0.05);
+    EXPECT_LT(seg.part_fraction[1], 0.2);
+}
