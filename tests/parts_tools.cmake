@@ -28,7 +28,7 @@ add_test(NAME PartsCli.BadSelectFails
          COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 64
                  parts.source.kind=mesh)
 set_tests_properties(PartsCli.BadSelectFails PROPERTIES LABELS unit
-                     PASS_REGULAR_EXPRESSION "tdf parts: .*parts.list\\[0\\].select: '1' is not a region of the mesh source \\(found: 'cap', 'base'\\)")
+                     PASS_REGULAR_EXPRESSION "tdf parts: .*parts.list\\[0\\].select: '1' is not a region of the mesh source \\(found: 'base', 'cap'\\)")
 add_test(NAME PartsCli.KLargerThanColoursFails
          COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 64
                  parts.source.kind=label_image parts.source.image=label_image.png parts.source.kind=colour
