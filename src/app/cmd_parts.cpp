@@ -154,9 +154,9 @@ Command register_parts(CLI::App& root) {
     app->add_option("--gutter", options->gutter, "texels the labels grow into the empty atlas around charts")
         ->capture_default_str()
         ->check(CLI::Range(0, 64));
-    app->add_option("--band", options->band, "texels over which two parts' tactile maps cross-fade [0, 4]")
+    app->add_option("--band", options->band, "texels over which two parts' tactile maps cross-fade [0, 1.5] (bleed stays within 2 texels)")
         ->capture_default_str()
-        ->check(CLI::Range(0.0, 4.0));
+        ->check(CLI::Range(0.0, 1.5));
     app->add_flag("!--no-target", options->target, "do not compose and write the multi-part tactile target");
     app->add_option("--work-folder", options->work_folder, "external source: parent of the call folder (default: temp)");
     command.app = app;

@@ -75,7 +75,7 @@ TEST(PartTarget, BoundaryBleedsAtMostTwoTexelsWithoutAVisibleSeam) {
     const Image soft = compose_part_target(labels, size, layers);
     const PartBoundaryMeasure h = measure_part_boundary(hard, labels, size, layers);
     const PartBoundaryMeasure s = measure_part_boundary(soft, labels, size, layers);
-    for (const auto& [what, r] : {std::pair<const char*, PartBoundaryMeasure>{"hard cut", h}, {"band 1", s}})
+    for (const auto& [what, r] : {std::pair<const char*, PartBoundaryMeasure>{"hard cut", h}, {"band 1.5", s}})
         std::printf("%-8s bleed %.2f texels, boundary step %.3f deg (hard cut %.3f, ratio %.2f), band detail %.3f, "
                     "interior step %.3f deg\n", what, r.bleed_texels, r.boundary_step_degrees, r.hard_step_degrees,
                     r.step_ratio, r.band_detail_ratio, r.interior_step_degrees);

@@ -26,9 +26,11 @@ struct PartTactile {
 std::vector<Image> lay_part_maps(const std::vector<PartTactile>& parts, int size);
 
 /// Blend band, in texels: a texel at centre distance d from the nearest texel of another part
-/// keeps weight min(1, 0.5 + 0.5 (d - 0.5) / band) for its own part (the rest for that part),
-/// i.e. with band 1 only texels touching the boundary (d = 1, weight 0.75) are blended.
-constexpr float kDefaultPartBand = 1.f;
+/// keeps weight min(1, 0.5 + 0.5 (d - 0.5) / band) for its own part (the rest goes to that
+/// part, blended by blend_normals). With the default 1.5 the texels touching the boundary
+/// (d = 1: 0.67, d = sqrt 2: 0.80) are blended and every texel at d >= 2 is pure, so neither
+/// material reaches more than sqrt 2 texels into the other; band 1 blends the same texels less.
+constexpr float kDefaultPartBand = 1.5f;
 
 /// The composed target normal map (3 channels, unit normals in [-1, 1]) from per-texel labels
 /// (index i * size + j; -1 = no part: flat (0,0,1)) and the layers of lay_part_maps. `band` in
