@@ -6,6 +6,7 @@
 //
 //   tdf_make_two_part_scene <folder>            write the files below
 //   tdf_make_two_part_scene --check <folder>    exit 1 if the folder's files differ
+#include <fmt/format.h>
 #include <tdf/atlas/gutter.h>
 #include <tdf/atlas/uv_raster.h>
 #include <tdf/core/atomic_file.h>
@@ -13,14 +14,12 @@
 #include <tdf/core/rng.h>
 #include <tdf/io/image_io.h>
 #include <tdf/scene/procedural_mesh.h>
-
-#include <fmt/format.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 namespace {
@@ -31,7 +30,8 @@ constexpr int kTextureSize = 256;
 constexpr int kTactileSize = 128;
 constexpr std::uint64_t kSeed = 20261201;
 constexpr float kPi = 3.14159265f;
-const char* const kFiles[] = {"sphere.obj", "sphere.mtl", "albedo.png", "labels.txt", "label_image.png", "ribs_normal.png"};
+const char* const kFiles[] = {
+    "sphere.obj", "sphere.mtl", "albedo.png", "labels.txt", "label_image.png", "ribs_normal.png"};
 
 // Ground truth: face f is in the cap (0) when its centroid lies above a wavy line of latitude.
 std::vector<int> face_parts(const TriangleMesh& mesh) {
@@ -39,7 +39,8 @@ std::vector<int> face_parts(const TriangleMesh& mesh) {
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
         const Vec3i& t = mesh.triangles[f];
         const Vec3f c = (mesh.positions[std::size_t(t.x)] + mesh.positions[std::size_t(t.y)] +
-                         mesh.positions[std::size_t(t.z)]) * (1.f / 3.f);
+                         mesh.positions[std::size_t(t.z)]) *
+                        (1.f / 3.f);
         const float azimuth = std::atan2(c.x, c.z);
         part[f] = c.y > 0.12f + 0.18f * std::sin(3.f * azimuth) ? 0 : 1;
     }
@@ -68,10 +69,13 @@ std::string obj_text(const TriangleMesh& mesh, const std::vector<int>& part) {
 float value_noise(const std::vector<float>& lattice, int n, float x, float y) {
     const float fx = std::floor(x), fy = std::floor(y);
     const float ax = x - fx, ay = y - fy;
-    const auto at = [&](int i, int j) { return lattice[std::size_t(((j % n) + n) % n * n + ((i % n) + n) % n)]; };
+    const auto at = [&](int i, int j) {
+        return lattice[std::size_t(((j % n) + n) % n * n + ((i % n) + n) % n)];
+    };
     const int i = int(fx), j = int(fy);
     const float sx = ax * ax * (3 - 2 * ax), sy = ay * ay * (3 - 2 * ay);
-    return (at(i, j) * (1 - sx) + at(i + 1, j) * sx) * (1 - sy) + (at(i, j + 1) * (1 - sx) + at(i + 1, j + 1) * sx) * sy;
+    return (at(i, j) * (1 - sx) + at(i + 1, j) * sx) * (1 - sy) +
+           (at(i, j + 1) * (1 - sx) + at(i + 1, j + 1) * sx) * sy;
 }
 
 void write_all(const std::string& folder) {
@@ -79,9 +83,10 @@ void write_all(const std::string& folder) {
     const TriangleMesh mesh = make_uv_sphere(0.8f, 48, 24);
     const std::vector<int> part = face_parts(mesh);
     write_text_atomically(folder + "/sphere.obj", obj_text(mesh, part));
-    write_text_atomically(folder + "/sphere.mtl",
-                          "# two materials sharing one albedo texture\nnewmtl cap\nKd 0.3 0.55 0.25\nmap_Kd albedo.png\n"
-                          "newmtl base\nKd 0.7 0.38 0.25\nmap_Kd albedo.png\n");
+    write_text_atomically(
+        folder + "/sphere.mtl",
+        "# two materials sharing one albedo texture\nnewmtl cap\nKd 0.3 0.55 0.25\nmap_Kd albedo.png\n"
+        "newmtl base\nKd 0.7 0.38 0.25\nmap_Kd albedo.png\n");
     std::string labels = "# ground truth: one label per triangle of sphere.obj, in file order\n";
     for (int p : part) labels += p == 0 ? "cap\n" : "base\n";
     write_text_atomically(folder + "/labels.txt", labels);
@@ -105,7 +110,8 @@ void write_all(const std::string& folder) {
             Vec3f c;
             if (part[std::size_t(f)] == 0) {
                 // Green cap with lighter spots (areoles).
-                const float spot = std::pow(std::max(0.f, std::sin(u * 2 * kPi * 24.f) * std::sin(v * 2 * kPi * 12.f)), 8.f);
+                const float spot =
+                    std::pow(std::max(0.f, std::sin(u * 2 * kPi * 24.f) * std::sin(v * 2 * kPi * 12.f)), 8.f);
                 c = Vec3f{0.24f, 0.50f, 0.22f} * (0.8f + 0.4f * noise) + Vec3f{0.35f, 0.3f, 0.2f} * spot;
             } else {
                 // Terracotta base with darker horizontal bands.

@@ -81,11 +81,18 @@ int run_parts(const PartsCommandOptions& o) {
             maps.emplace_back(map.normals);
             float scale = p.layout.repeat;
             if (p.layout.mode == "physical") {
-                const float mm_per_pixel = p.layout.mm_per_pixel > 0 ? p.layout.mm_per_pixel : map.mm_per_pixel;
+                const float mm_per_pixel =
+                    p.layout.mm_per_pixel > 0 ? p.layout.mm_per_pixel : map.mm_per_pixel;
                 if (!(mm_per_pixel > 0))
-                    throw_error("{}: part '{}': layout.mode is 'physical' but '{}' has no tdf:mm_per_pixel metadata and "
-                                "layout.mm_per_pixel is not set", o.scene_path, p.name, p.tactile_images.front());
-                scale = physical_tactile_uv_scale(*input.atlas, p.layout.mm_per_unit, map.normals.width(), mm_per_pixel);
+                    throw_error(
+                        "{}: part '{}': layout.mode is 'physical' but '{}' has no tdf:mm_per_pixel metadata "
+                        "and "
+                        "layout.mm_per_pixel is not set",
+                        o.scene_path,
+                        p.name,
+                        p.tactile_images.front());
+                scale = physical_tactile_uv_scale(
+                    *input.atlas, p.layout.mm_per_unit, map.normals.width(), mm_per_pixel);
             }
             tactile.push_back({nullptr, scale});
         }
@@ -93,10 +100,12 @@ int run_parts(const PartsCommandOptions& o) {
         const std::vector<Image> layers = lay_part_maps(tactile, seg.size);
         const std::vector<int> labels = dilate_labels(seg.texel_part, seg.size, o.gutter);
         const Image target = compose_part_target(labels, seg.size, layers, o.band);
-        write_atomically(base + "_tactile_target.png",
-                         [&](const std::string& tmp) { write_png(tmp, encode_normal_map(target), 8, Quantize::Truncate); });
+        write_atomically(base + "_tactile_target.png", [&](const std::string& tmp) {
+            write_png(tmp, encode_normal_map(target), 8, Quantize::Truncate);
+        });
         const PartBoundaryMeasure m = measure_part_boundary(target, seg.texel_part, seg.size, layers, o.band);
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         Json scales = Json::array();
         for (const PartTactile& t : tactile) scales.push_back(t.uv_scale);
         report["target"] = {{"band_width_texels", o.band},
@@ -109,30 +118,55 @@ int run_parts(const PartsCommandOptions& o) {
                             {"interior_step_degrees", m.interior_step_degrees},
                             {"boundary_pairs", m.boundary_pairs},
                             {"seconds", seconds}};
-        std::printf("target: %s_tactile_target.png; at part boundaries: bleed %.1f texels, step %.2f deg (a hard cut: "
-                    "%.2f deg), relief strength in the band %.2f of the parts'\n", name.c_str(), m.bleed_texels,
-                    m.boundary_step_degrees, m.hard_step_degrees, m.band_detail_ratio);
+        std::printf(
+            "target: %s_tactile_target.png; at part boundaries: bleed %.1f texels, step %.2f deg (a hard "
+            "cut: "
+            "%.2f deg), relief strength in the band %.2f of the parts'\n",
+            name.c_str(),
+            m.bleed_texels,
+            m.boundary_step_degrees,
+            m.hard_step_degrees,
+            m.band_detail_ratio);
     }
     write_text_atomically(base + "_parts.json", report.dump(2) + "\n");
 
-    std::printf("parts of %s (source %s, %dx%d texels, %.2f s):\n", o.scene_path.c_str(),
-                description.parts.source.kind.c_str(), seg.size, seg.size, seg.seconds);
+    std::printf("parts of %s (source %s, %dx%d texels, %.2f s):\n",
+                o.scene_path.c_str(),
+                description.parts.source.kind.c_str(),
+                seg.size,
+                seg.size,
+                seg.seconds);
     for (std::size_t p = 0; p < seg.part_count(); ++p) {
         const Vec3f c = part_colour(int(p));
-        std::printf("  %zu %-16s %6.2f %% of the surface  label colour #%02x%02x%02x\n", p, seg.part_names[p].c_str(),
-                    100.0 * seg.part_fraction[p], int(c.x * 255), int(c.y * 255), int(c.z * 255));
+        std::printf("  %zu %-16s %6.2f %% of the surface  label colour #%02x%02x%02x\n",
+                    p,
+                    seg.part_names[p].c_str(),
+                    100.0 * seg.part_fraction[p],
+                    int(c.x * 255),
+                    int(c.y * 255),
+                    int(c.z * 255));
     }
     std::printf("regions found by the source:\n");
     for (const PartRegion& r : seg.regions) {
-        std::printf("  %-12s -> %-16s %6.2f %%", r.name.c_str(), seg.part_names[std::size_t(r.part)].c_str(),
+        std::printf("  %-12s -> %-16s %6.2f %%",
+                    r.name.c_str(),
+                    seg.part_names[std::size_t(r.part)].c_str(),
                     100.0 * r.fraction);
         if (r.has_colour)
-            std::printf("  mean colour #%02x%02x%02x", int(std::lround(r.rgb.x * 255)), int(std::lround(r.rgb.y * 255)),
+            std::printf("  mean colour #%02x%02x%02x",
+                        int(std::lround(r.rgb.x * 255)),
+                        int(std::lround(r.rgb.y * 255)),
                         int(std::lround(r.rgb.z * 255)));
         std::printf("\n");
     }
-    std::printf("wrote %s_label_map.png, %s_label_legend.json, %s_mask_<part>.png, %s_face_labels.txt, %s_parts.json\n",
-                base.c_str(), name.c_str(), name.c_str(), name.c_str(), name.c_str());
+    std::printf(
+        "wrote %s_label_map.png, %s_label_legend.json, %s_mask_<part>.png, %s_face_labels.txt, "
+        "%s_parts.json\n",
+        base.c_str(),
+        name.c_str(),
+        name.c_str(),
+        name.c_str(),
+        name.c_str());
     return 0;
 }
 
@@ -149,16 +183,21 @@ Command register_parts(CLI::App& root) {
     app->add_option("overrides", options->overrides, "scene overrides key=value (e.g. parts.source.k=3)");
     app->add_option("-o,--output", options->output_dir, "output folder")->required();
     app->add_option("--name", options->name, "file name prefix (default: the scene's folder name)");
-    app->add_option("--size", options->size, "label raster side in texels (the optimizer's texture size) [16, 16384]")
+    app->add_option(
+           "--size", options->size, "label raster side in texels (the optimizer's texture size) [16, 16384]")
         ->capture_default_str();
     app->add_option("--gutter", options->gutter, "texels the labels grow into the empty atlas around charts")
         ->capture_default_str()
         ->check(CLI::Range(0, 64));
-    app->add_option("--band", options->band, "texels over which two parts' tactile maps cross-fade [0, 1.5] (bleed stays within 2 texels)")
+    app->add_option(
+           "--band",
+           options->band,
+           "texels over which two parts' tactile maps cross-fade [0, 1.5] (bleed stays within 2 texels)")
         ->capture_default_str()
         ->check(CLI::Range(0.0, 1.5));
     app->add_flag("!--no-target", options->target, "do not compose and write the multi-part tactile target");
-    app->add_option("--work-folder", options->work_folder, "external source: parent of the call folder (default: temp)");
+    app->add_option(
+        "--work-folder", options->work_folder, "external source: parent of the call folder (default: temp)");
     command.app = app;
     command.run = [options] { return run_parts(*options); };
     return command;

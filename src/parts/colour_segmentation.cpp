@@ -1,11 +1,10 @@
 // Colour clustering for the `colour` parts source. Lloyd's k-means on a deterministic subsample
 // (the update is serial and cheap; the assignment of every sample is parallel and independent,
 // so results do not depend on the thread count).
-#include <tdf/parts/colour_segmentation.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
+#include <tdf/parts/colour_segmentation.h>
 
 #include <algorithm>
 #include <atomic>
@@ -91,7 +90,9 @@ KMeansResult kmeans(const std::vector<Vec3f>& points, const std::vector<float>& 
         }
         for (std::size_t c = 0; c < std::size_t(k); ++c) {
             if (mass[c] > 0) {
-                centres[c] = {float(sum[c * 3] / mass[c]), float(sum[c * 3 + 1] / mass[c]), float(sum[c * 3 + 2] / mass[c])};
+                centres[c] = {float(sum[c * 3] / mass[c]),
+                              float(sum[c * 3 + 1] / mass[c]),
+                              float(sum[c * 3 + 2] / mass[c])};
             } else {
                 // Empty cluster: restart it at the point farthest from its centre.
                 std::size_t far = 0;
@@ -111,7 +112,9 @@ KMeansResult kmeans(const std::vector<Vec3f>& points, const std::vector<float>& 
     }
     KMeansResult r;
     r.centres = centres;
-    for (std::size_t i = 0; i < n; ++i) r.inertia += double(weight[i]) * distance2(points[i], centres[std::size_t(nearest(centres, points[i]))]);
+    for (std::size_t i = 0; i < n; ++i)
+        r.inertia +=
+            double(weight[i]) * distance2(points[i], centres[std::size_t(nearest(centres, points[i]))]);
     return r;
 }
 
@@ -129,7 +132,8 @@ double mean_silhouette(const std::vector<Vec3f>& points, const std::vector<Vec3f
     std::vector<double> sum(k);
     for (std::size_t i = 0; i < n; ++i) {
         std::fill(sum.begin(), sum.end(), 0.0);
-        for (std::size_t j = 0; j < n; ++j) sum[std::size_t(label[j])] += std::sqrt(double(distance2(points[i], points[j])));
+        for (std::size_t j = 0; j < n; ++j)
+            sum[std::size_t(label[j])] += std::sqrt(double(distance2(points[i], points[j])));
         const auto own = std::size_t(label[i]);
         if (count[own] <= 1) continue;  // silhouette 0 for singletons
         const double a = sum[own] / double(count[own] - 1);
@@ -157,8 +161,10 @@ Vec3f srgb_to_lab(Vec3f rgb) {
 
 ColourClustering cluster_colours(const std::vector<Vec3f>& rgb, const std::vector<float>& weight,
                                  const ColourClusteringOptions& options, const std::string& where) {
-    if (rgb.size() != weight.size()) throw_error("{}: {} colours but {} weights", where, rgb.size(), weight.size());
-    if (options.k_max < 2 || options.k_max > 16) throw_error("{}: k_max must be in [2, 16], got {}", where, options.k_max);
+    if (rgb.size() != weight.size())
+        throw_error("{}: {} colours but {} weights", where, rgb.size(), weight.size());
+    if (options.k_max < 2 || options.k_max > 16)
+        throw_error("{}: k_max must be in [2, 16], got {}", where, options.k_max);
     if (options.k == 1 || options.k < 0 || options.k > 16)
         throw_error("{}: k must be 0 (choose) or in [2, 16], got {}", where, options.k);
     ColourClustering out;
@@ -166,17 +172,23 @@ ColourClustering cluster_colours(const std::vector<Vec3f>& rgb, const std::vecto
         std::unordered_set<std::uint32_t> seen;
         for (const Vec3f& c : rgb) {
             std::uint32_t key = 0;
-            for (int a = 0; a < 3; ++a) key = key * 256u + std::uint32_t(std::lround(std::clamp(c[a], 0.f, 1.f) * 255.f));
+            for (int a = 0; a < 3; ++a)
+                key = key * 256u + std::uint32_t(std::lround(std::clamp(c[a], 0.f, 1.f) * 255.f));
             seen.insert(key);
         }
         out.distinct_colours = int(seen.size());
     }
     if (rgb.empty()) throw_error("{}: no surface texels to segment", where);
     if (options.k > out.distinct_colours)
-        throw_error("{}: k is {} but the albedo has only {} distinct colour(s)", where, options.k, out.distinct_colours);
+        throw_error("{}: k is {} but the albedo has only {} distinct colour(s)",
+                    where,
+                    options.k,
+                    out.distinct_colours);
     if (out.distinct_colours < 2)
-        throw_error("{}: the albedo has a single colour; colour segmentation needs at least 2 (use another parts source)",
-                    where);
+        throw_error(
+            "{}: the albedo has a single colour; colour segmentation needs at least 2 (use another parts "
+            "source)",
+            where);
 
     std::vector<Vec3f> lab(rgb.size());
     parallel_for(rgb.size(), 4096, [&](std::size_t begin, std::size_t end) {
@@ -229,7 +241,8 @@ ColourClustering cluster_colours(const std::vector<Vec3f>& rgb, const std::vecto
     }
     std::vector<std::size_t> order(k);
     std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return mass[a] > mass[b]; });
+    std::stable_sort(
+        order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return mass[a] > mass[b]; });
     std::vector<int> rank(k);
     for (std::size_t r = 0; r < k; ++r) {
         const std::size_t c = order[r];
@@ -246,8 +259,9 @@ ColourClustering cluster_colours(const std::vector<Vec3f>& rgb, const std::vecto
     return out;
 }
 
-void majority_smooth(std::vector<int>& label, const std::vector<std::vector<std::pair<int, float>>>& neighbours,
-                     int rounds, float self_weight) {
+void majority_smooth(std::vector<int>& label,
+                     const std::vector<std::vector<std::pair<int, float>>>& neighbours, int rounds,
+                     float self_weight) {
     int top = 0;
     for (int l : label) top = std::max(top, l + 1);
     for (int round = 0; round < rounds; ++round) {

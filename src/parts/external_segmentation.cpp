@@ -1,23 +1,22 @@
 // The `external` parts source (protocol in docs/parts-protocol.md). One call for all views: the
 // program may batch them (a segmenter loads its weights once).
-#include <tdf/parts/external_segmentation.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/guidance/subprocess.h>
 #include <tdf/io/image_io.h>
 #include <tdf/parts/colour_segmentation.h>
+#include <tdf/parts/external_segmentation.h>
 #include <tdf/parts/part_segmentation.h>
 #include <tdf/render/trace.h>
 #include <tdf/scene/camera.h>
 #include <tdf/scene/embree_scene.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
-#include <unistd.h>
 
 namespace tdf {
 
@@ -67,11 +66,14 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
     reader.check_all_read();
     if (!(timeout > 0)) throw_error("{}: 'timeout_seconds' must be positive", where);
     if (views < 1 || views > 256) throw_error("{}: 'views' must be in [1, 256], got {}", where, views);
-    if (resolution < 16 || resolution > 4096) throw_error("{}: 'resolution' must be in [16, 4096], got {}", where, resolution);
+    if (resolution < 16 || resolution > 4096)
+        throw_error("{}: 'resolution' must be in [16, 4096], got {}", where, resolution);
     if (elevations.empty()) throw_error("{}: 'elevations' is empty", where);
 
-    const std::string parent = input.work_folder.empty() ? fs::temp_directory_path().string() : input.work_folder;
-    const std::string folder = fs::absolute(fs::path(parent) / fmt::format("tdf-parts-{}", ::getpid())).string();
+    const std::string parent =
+        input.work_folder.empty() ? fs::temp_directory_path().string() : input.work_folder;
+    const std::string folder =
+        fs::absolute(fs::path(parent) / fmt::format("tdf-parts-{}", ::getpid())).string();
     fs::remove_all(folder);
     ensure_folder(folder);
 
@@ -99,38 +101,58 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
         write_png(fmt::format("{}/input_{}.png", folder, k), colour);
         write_png(fmt::format("{}/mask_{}.png", folder, k), mask);
         Json outputs = Json::array();
-        for (std::size_t p = 0; p < input.part_names.size(); ++p) outputs.push_back(fmt::format("part_{}_{}.png", k, p));
-        images.push_back({{"input", fmt::format("input_{}.png", k)}, {"mask", fmt::format("mask_{}.png", k)},
-                          {"outputs", outputs}, {"elevation", elevation}, {"azimuth", azimuth}});
+        for (std::size_t p = 0; p < input.part_names.size(); ++p)
+            outputs.push_back(fmt::format("part_{}_{}.png", k, p));
+        images.push_back({{"input", fmt::format("input_{}.png", k)},
+                          {"mask", fmt::format("mask_{}.png", k)},
+                          {"outputs", outputs},
+                          {"elevation", elevation},
+                          {"azimuth", azimuth}});
         buffers.push_back(std::move(g));
     }
     Json parts = Json::array();
     for (std::size_t p = 0; p < input.part_names.size(); ++p) {
-        const std::string prompt = p < input.prompts.size() && !input.prompts[p].empty() ? input.prompts[p]
-                                                                                          : input.part_names[p];
+        const std::string prompt =
+            p < input.prompts.size() && !input.prompts[p].empty() ? input.prompts[p] : input.part_names[p];
         parts.push_back({{"index", p}, {"name", input.part_names[p]}, {"prompt", prompt}});
     }
     const std::string request = folder + "/request.json";
-    write_text_atomically(request, Json{{"protocol", "tdf-parts/1"}, {"width", resolution}, {"height", resolution},
-                                        {"count", views}, {"folder", folder}, {"parts", parts}, {"images", images}}
-                                           .dump(2) + "\n");
+    write_text_atomically(request,
+                          Json{{"protocol", "tdf-parts/1"},
+                               {"width", resolution},
+                               {"height", resolution},
+                               {"count", views},
+                               {"folder", folder},
+                               {"parts", parts},
+                               {"images", images}}
+                                  .dump(2) +
+                              "\n");
     bool placed = false;
     for (std::string& a : argv) {
-        if (a.find("{request}") != std::string::npos || a.find("{folder}") != std::string::npos) placed = true;
+        if (a.find("{request}") != std::string::npos || a.find("{folder}") != std::string::npos)
+            placed = true;
         a = replace_all(replace_all(a, "{request}", request), "{folder}", folder);
     }
     if (!placed) {
-        if (shell) argv[0] += " " + request;
-        else argv.push_back(request);
+        if (shell)
+            argv[0] += " " + request;
+        else
+            argv.push_back(request);
     }
     if (shell) argv = {"/bin/sh", "-c", argv[0]};
     const ProcessOutcome outcome =
         run_process(argv, folder, timeout, folder + "/stdout.txt", folder + "/stderr.txt");
     if (outcome.timed_out)
-        throw_error("{}: '{}' timed out after {} s (files kept in {})", where, format_command(argv), timeout, folder);
+        throw_error(
+            "{}: '{}' timed out after {} s (files kept in {})", where, format_command(argv), timeout, folder);
     if (outcome.exit_code != 0)
-        throw_error("{}: '{}' failed (exit {}, signal {}): {} (files kept in {})", where, format_command(argv),
-                    outcome.exit_code, outcome.signal, file_tail(folder + "/stderr.txt", 1), folder);
+        throw_error("{}: '{}' failed (exit {}, signal {}): {} (files kept in {})",
+                    where,
+                    format_command(argv),
+                    outcome.exit_code,
+                    outcome.signal,
+                    file_tail(folder + "/stderr.txt", 1),
+                    folder);
 
     // Votes: every pixel a view sees, in the part whose mask is strongest there (> 0.5).
     const std::size_t part_count = input.part_names.size();
@@ -140,10 +162,17 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
         std::vector<Image> masks;
         for (std::size_t p = 0; p < part_count; ++p) {
             const std::string file = fmt::format("{}/part_{}_{}.png", folder, k, p);
-            if (!fs::exists(file)) throw_error("{}: the program did not write {} (files kept in {})", where, file, folder);
+            if (!fs::exists(file))
+                throw_error("{}: the program did not write {} (files kept in {})", where, file, folder);
             Image m = read_image(file);
             if (m.width() != resolution || m.height() != resolution)
-                throw_error("{}: {} is {}x{}, expected {}x{}", where, file, m.width(), m.height(), resolution, resolution);
+                throw_error("{}: {} is {}x{}, expected {}x{}",
+                            where,
+                            file,
+                            m.width(),
+                            m.height(),
+                            resolution,
+                            resolution);
             masks.push_back(std::move(m));
         }
         for (int y = 0; y < resolution; ++y)
@@ -154,7 +183,8 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
                 float best_v = 0.5f;
                 for (std::size_t p = 0; p < part_count; ++p) {
                     const float v = masks[p].at(x, y, 0);
-                    if (!std::isfinite(v)) throw_error("{}: part_{}_{}.png has a non-finite value", where, k, p);
+                    if (!std::isfinite(v))
+                        throw_error("{}: part_{}_{}.png has a non-finite value", where, k, p);
                     if (v > best_v) {
                         best_v = v;
                         best = int(p);
@@ -195,7 +225,11 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
     for (int& l : label)
         if (l < 0) l = 0;
     majority_smooth(label, adjacency, input.smoothing);
-    log_info("{}: {} of {} faces seen in {} views ({:.1f} s in the program)", where, seen, label.size(), views,
+    log_info("{}: {} of {} faces seen in {} views ({:.1f} s in the program)",
+             where,
+             seen,
+             label.size(),
+             views,
              outcome.seconds);
     if (!keep_files) fs::remove_all(folder);
     return label;

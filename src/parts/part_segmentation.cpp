@@ -1,8 +1,6 @@
 // Part segmentation: each source produces named regions per face or per atlas texel; regions
 // are matched to parts by the parts' `select`; the other representation is derived (texels
 // from faces through the atlas raster, faces from texels by majority).
-#include <tdf/parts/part_segmentation.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
@@ -10,6 +8,7 @@
 #include <tdf/io/image_io.h>
 #include <tdf/parts/colour_segmentation.h>
 #include <tdf/parts/external_segmentation.h>
+#include <tdf/parts/part_segmentation.h>
 
 #include <algorithm>
 #include <cctype>
@@ -26,8 +25,8 @@ namespace {
 // What a source found: region names and, per face or per texel, a region index (-1 = none).
 struct SourceRegions {
     std::vector<std::string> names;
-    std::vector<int> face;   // per face, or empty
-    std::vector<int> texel;  // per atlas texel, or empty
+    std::vector<int> face;         // per face, or empty
+    std::vector<int> texel;        // per atlas texel, or empty
     std::vector<PartRegion> info;  // extra per-region data (colour), same order as names
     std::vector<double> silhouette;
     int distinct_colours = 0;
@@ -54,8 +53,11 @@ std::string list_names(const std::vector<std::string>& names) {
 
 SourceRegions mesh_regions(const PartsSpec& spec, const TriangleMesh& mesh, const std::string& where) {
     if (mesh.face_groups.empty())
-        throw_error("{}.source: kind 'mesh' but '{}' has no objects, groups or materials (a single region); use "
-                    "another source", where, mesh.source_path);
+        throw_error(
+            "{}.source: kind 'mesh' but '{}' has no objects, groups or materials (a single region); use "
+            "another source",
+            where,
+            mesh.source_path);
     SourceRegions r;
     const std::string& key = spec.source.key;
     std::vector<int> group_region(mesh.face_groups.size(), -1);
@@ -64,7 +66,8 @@ SourceRegions mesh_regions(const PartsSpec& spec, const TriangleMesh& mesh, cons
         const auto g = std::size_t(mesh.face_group[f]);
         if (group_region[g] < 0) {
             const FaceGroup& fg = mesh.face_groups[g];
-            std::string name = key == "material" ? fg.material : key == "object" ? fg.object
+            std::string name = key == "material" ? fg.material
+                               : key == "object" ? fg.object
                                : key == "group"  ? fg.group
                                                  : std::to_string(g);
             if (name.empty()) name = "(none)";
@@ -90,35 +93,53 @@ SourceRegions face_label_regions(const PartsSpec& spec, const TriangleMesh& mesh
         std::string label, extra;
         if (!(tokens >> label)) continue;
         if (tokens >> extra)
-            throw_error("{}:{}: one label per line expected, got '{}' and '{}'", path, line_number, label, extra);
+            throw_error(
+                "{}:{}: one label per line expected, got '{}' and '{}'", path, line_number, label, extra);
         if (r.face.size() == mesh.triangles.size())
-            throw_error("{}: more labels than the mesh's {} triangles (line {})", path, mesh.triangles.size(), line_number);
+            throw_error("{}: more labels than the mesh's {} triangles (line {})",
+                        path,
+                        mesh.triangles.size(),
+                        line_number);
         r.face.push_back(region_index(r, label));
     }
     if (r.face.size() != mesh.triangles.size())
-        throw_error("{}: {} labels for the mesh's {} triangles (one line per triangle, polygons fanned)", path,
-                    r.face.size(), mesh.triangles.size());
+        throw_error("{}: {} labels for the mesh's {} triangles (one line per triangle, polygons fanned)",
+                    path,
+                    r.face.size(),
+                    mesh.triangles.size());
     return r;
 }
 
 // The source mesh's UV at barycentric b of face f.
 Vec2f source_uv(const TriangleMesh& mesh, int f, Vec3f b) {
     const Vec3i& t = mesh.uv_triangles[std::size_t(f)];
-    return mesh.uvs[std::size_t(t.x)] * b.x + mesh.uvs[std::size_t(t.y)] * b.y + mesh.uvs[std::size_t(t.z)] * b.z;
+    return mesh.uvs[std::size_t(t.x)] * b.x + mesh.uvs[std::size_t(t.y)] * b.y +
+           mesh.uvs[std::size_t(t.z)] * b.z;
 }
 
-SourceRegions label_image_regions(const PartsSpec& spec, const PartSegmentationInput& in, const UvRaster& raster,
-                                  const std::string& where) {
+SourceRegions label_image_regions(const PartsSpec& spec, const PartSegmentationInput& in,
+                                  const UvRaster& raster, const std::string& where) {
     const TriangleMesh& mesh = *in.mesh;
     if (!mesh.has_uvs())
-        throw_error("{}.source: kind 'label_image' needs a mesh with UVs ('{}' has none)", where, mesh.source_path);
+        throw_error(
+            "{}.source: kind 'label_image' needs a mesh with UVs ('{}' has none)", where, mesh.source_path);
     const Image image = read_image(spec.source.image);
     const MipTexture* albedo = in.material ? in.material->albedo : nullptr;
-    if (albedo && !albedo->empty() && (image.width() != albedo->width() || image.height() != albedo->height()))
-        throw_error("{}.source.image: '{}' is {}x{} but the mesh's albedo texture is {}x{} (paint the labels over it)",
-                    where, spec.source.image, image.width(), image.height(), albedo->width(), albedo->height());
+    if (albedo && !albedo->empty() &&
+        (image.width() != albedo->width() || image.height() != albedo->height()))
+        throw_error(
+            "{}.source.image: '{}' is {}x{} but the mesh's albedo texture is {}x{} (paint the labels over "
+            "it)",
+            where,
+            spec.source.image,
+            image.width(),
+            image.height(),
+            albedo->width(),
+            albedo->height());
     if (image.channels() < 3)
-        throw_error("{}.source.image: '{}' has {} channel(s); an RGB image is needed", where, spec.source.image,
+        throw_error("{}.source.image: '{}' has {} channel(s); an RGB image is needed",
+                    where,
+                    spec.source.image,
                     image.channels());
     SourceRegions r;
     r.texel.assign(raster.texel_count(), -1);
@@ -133,10 +154,12 @@ SourceRegions label_image_regions(const PartsSpec& spec, const PartSegmentationI
         const int y = std::clamp(int(std::floor((1.f - uv.y) * float(h))), 0, h - 1);
         const float* p = image.pixel(x, y);
         std::uint32_t key = 0;
-        for (int c = 0; c < 3; ++c) key = key * 256u + std::uint32_t(std::lround(std::clamp(p[c], 0.f, 1.f) * 255.f));
+        for (int c = 0; c < 3; ++c)
+            key = key * 256u + std::uint32_t(std::lround(std::clamp(p[c], 0.f, 1.f) * 255.f));
         auto it = by_colour.find(key);
         if (it == by_colour.end()) {
-            const Vec3f rgb{float(key >> 16) / 255.f, float((key >> 8) & 255u) / 255.f, float(key & 255u) / 255.f};
+            const Vec3f rgb{
+                float(key >> 16) / 255.f, float((key >> 8) & 255u) / 255.f, float(key & 255u) / 255.f};
             it = by_colour.emplace(key, region_index(r, hex_colour(rgb))).first;
             PartRegion info;
             info.has_colour = true;
@@ -233,7 +256,8 @@ Vec3f albedo_at(const TriangleMesh& mesh, const SurfaceMaterial& material, int f
             return mesh.colors[std::size_t(t.x)] * b.x + mesh.colors[std::size_t(t.y)] * b.y +
                    mesh.colors[std::size_t(t.z)] * b.z;
         }
-        case Source::Constant: break;
+        case Source::Constant:
+            break;
     }
     return material.albedo_constant;
 }
@@ -254,7 +278,8 @@ std::vector<std::vector<std::pair<int, float>>> face_adjacency(const TriangleMes
     edges.reserve(mesh.triangles.size() * 3);
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
         for (int k = 0; k < 3; ++k) {
-            const auto a = std::uint32_t(mesh.triangles[f][k]), b = std::uint32_t(mesh.triangles[f][(k + 1) % 3]);
+            const auto a = std::uint32_t(mesh.triangles[f][k]),
+                       b = std::uint32_t(mesh.triangles[f][(k + 1) % 3]);
             edges.push_back({(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b), int(f)});
         }
     std::sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) {
@@ -269,7 +294,8 @@ std::vector<std::vector<std::pair<int, float>>> face_adjacency(const TriangleMes
         const float len = std::max(length(pa - pb), 1e-12f);
         for (std::size_t i = s; i < e; ++i)
             for (std::size_t j = s; j < e; ++j)
-                if (i != j && edges[i].face != edges[j].face) out[std::size_t(edges[i].face)].push_back({edges[j].face, len});
+                if (i != j && edges[i].face != edges[j].face)
+                    out[std::size_t(edges[i].face)].push_back({edges[j].face, len});
         s = e;
     }
     return out;
@@ -290,7 +316,8 @@ std::vector<int> face_labels_from_texels(const TriangleMesh& mesh, const UvRaste
     }
     std::vector<int> out(faces, -1);
     for (std::size_t f = 0; f < faces; ++f)
-        if (!votes[f].empty()) out[f] = int(std::max_element(votes[f].begin(), votes[f].end()) - votes[f].begin());
+        if (!votes[f].empty())
+            out[f] = int(std::max_element(votes[f].begin(), votes[f].end()) - votes[f].begin());
     // Faces without texels (smaller than a texel): propagate from labelled neighbours.
     if (std::find(out.begin(), out.end(), -1) != out.end()) {
         const auto adjacency = face_adjacency(mesh);
@@ -328,21 +355,31 @@ Json PartSegmentation::report(const PartsSpec& spec) const {
         Json regions_of = Json::array();
         for (const PartRegion& r : regions)
             if (r.part == int(p)) regions_of.push_back(r.name);
-        parts.push_back({{"index", p}, {"name", part_names[p]}, {"faces", faces}, {"texels", texels},
-                         {"fraction", part_fraction[p]}, {"regions", regions_of}});
+        parts.push_back({{"index", p},
+                         {"name", part_names[p]},
+                         {"faces", faces},
+                         {"texels", texels},
+                         {"fraction", part_fraction[p]},
+                         {"regions", regions_of}});
     }
     Json found = Json::array();
     for (const PartRegion& r : regions) {
-        Json j = {{"name", r.name}, {"part", r.part >= 0 ? Json(part_names[std::size_t(r.part)]) : Json(nullptr)},
+        Json j = {{"name", r.name},
+                  {"part", r.part >= 0 ? Json(part_names[std::size_t(r.part)]) : Json(nullptr)},
                   {"fraction", r.fraction}};
         if (r.has_colour) {
-            j["rgb"] = {int(std::lround(r.rgb.x * 255.f)), int(std::lround(r.rgb.y * 255.f)), int(std::lround(r.rgb.z * 255.f))};
+            j["rgb"] = {int(std::lround(r.rgb.x * 255.f)),
+                        int(std::lround(r.rgb.y * 255.f)),
+                        int(std::lround(r.rgb.z * 255.f))};
             j["hex"] = hex_colour(r.rgb);
             if (spec.source.kind == "colour") j["lab"] = {r.lab.x, r.lab.y, r.lab.z};
         }
         found.push_back(j);
     }
-    Json out = {{"source", spec.source.kind}, {"size", size}, {"parts", parts}, {"regions", found},
+    Json out = {{"source", spec.source.kind},
+                {"size", size},
+                {"parts", parts},
+                {"regions", found},
                 {"seconds", seconds}};
     if (spec.source.kind == "mesh") out["key"] = spec.source.key;
     if (spec.source.kind == "colour") {
@@ -360,12 +397,17 @@ Json PartSegmentation::report(const PartsSpec& spec) const {
 PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInput& in) {
     const auto start = std::chrono::steady_clock::now();
     const std::string where = in.where.empty() ? std::string("parts") : in.where;
-    if (!in.mesh || !in.atlas || !in.material) throw_error("{}: segment_parts needs a mesh, an atlas and a material", where);
-    if (spec.parts.size() < 2) throw_error("{}: at least 2 parts are needed, got {}", where, spec.parts.size());
+    if (!in.mesh || !in.atlas || !in.material)
+        throw_error("{}: segment_parts needs a mesh, an atlas and a material", where);
+    if (spec.parts.size() < 2)
+        throw_error("{}: at least 2 parts are needed, got {}", where, spec.parts.size());
     if (in.atlas->triangles.size() != in.mesh->triangles.size())
-        throw_error("{}: the atlas has {} faces but the mesh {}", where, in.atlas->triangles.size(),
+        throw_error("{}: the atlas has {} faces but the mesh {}",
+                    where,
+                    in.atlas->triangles.size(),
                     in.mesh->triangles.size());
-    if (in.size < 16 || in.size > 16384) throw_error("{}: texel raster size {} is not in [16, 16384]", where, in.size);
+    if (in.size < 16 || in.size > 16384)
+        throw_error("{}: texel raster size {} is not in [16, 16384]", where, in.size);
     UvRaster raster = rasterize_uv(*in.atlas, in.size);
     add_partial_texels(*in.atlas, raster);
 
@@ -405,35 +447,52 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
     int catch_all = -1;
     bool any_select = false;
     for (std::size_t p = 0; p < parts; ++p) {
-        if (spec.parts[p].select.empty()) catch_all = int(p);
-        else any_select = true;
+        if (spec.parts[p].select.empty())
+            catch_all = int(p);
+        else
+            any_select = true;
     }
     // Region sizes in texels (for messages and the report).
     std::vector<std::size_t> region_texels(src.names.size(), 0);
     std::size_t covered = 0;
     {
-        const std::vector<int> texel_region = src.texel.empty() ? texel_labels_from_faces(raster, src.face) : src.texel;
+        const std::vector<int> texel_region =
+            src.texel.empty() ? texel_labels_from_faces(raster, src.face) : src.texel;
         for (int r : texel_region)
             if (r >= 0) {
                 ++region_texels[std::size_t(r)];
                 ++covered;
             }
     }
-    const auto fraction = [&](std::size_t r) { return covered ? double(region_texels[r]) / double(covered) : 0.0; };
+    const auto fraction = [&](std::size_t r) {
+        return covered ? double(region_texels[r]) / double(covered) : 0.0;
+    };
     if (!any_select) {
         if (src.names.size() != parts)
-            throw_error("{}: the {} source found {} regions ({}) but there are {} parts; give the parts a 'select' "
-                        "(run `tdf parts` to see the regions)", where, kind, src.names.size(), list_names(src.names), parts);
+            throw_error(
+                "{}: the {} source found {} regions ({}) but there are {} parts; give the parts a 'select' "
+                "(run `tdf parts` to see the regions)",
+                where,
+                kind,
+                src.names.size(),
+                list_names(src.names),
+                parts);
         for (std::size_t r = 0; r < parts; ++r) region_part[r] = int(r);
     } else {
         for (std::size_t p = 0; p < parts; ++p)
             for (const std::string& s : spec.parts[p].select) {
                 std::string wanted = s;
-                if (kind == "label_image") std::transform(wanted.begin(), wanted.end(), wanted.begin(),
-                                   [](unsigned char c) { return char(std::tolower(c)); });
+                if (kind == "label_image")
+                    std::transform(wanted.begin(), wanted.end(), wanted.begin(), [](unsigned char c) {
+                        return char(std::tolower(c));
+                    });
                 const auto it = std::find(src.names.begin(), src.names.end(), wanted);
                 if (it == src.names.end())
-                    throw_error("{}.list[{}].select: '{}' is not a region of the {} source (found: {})", where, p, s, kind,
+                    throw_error("{}.list[{}].select: '{}' is not a region of the {} source (found: {})",
+                                where,
+                                p,
+                                s,
+                                kind,
                                 list_names(src.names));
                 region_part[std::size_t(it - src.names.begin())] = int(p);
             }
@@ -455,8 +514,13 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
                 if (region_part[r] < 0)
                     throw_error("{}: region '{}' is selected by no part", where, src.names[r]);
             } else {
-                throw_error("{}: region '{}' ({:.1f} % of the surface) is selected by no part; select it or leave one "
-                            "part without 'select' to take the rest", where, src.names[r], 100.0 * fraction(r));
+                throw_error(
+                    "{}: region '{}' ({:.1f} % of the surface) is selected by no part; select it or leave "
+                    "one "
+                    "part without 'select' to take the rest",
+                    where,
+                    src.names[r],
+                    100.0 * fraction(r));
             }
         }
     }
@@ -471,7 +535,8 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
     };
     if (!src.texel.empty()) {
         out.texel_part = map_label(src.texel);
-        out.face_part = face_labels_from_texels(*in.mesh, raster, out.texel_part, catch_all >= 0 ? catch_all : 0);
+        out.face_part =
+            face_labels_from_texels(*in.mesh, raster, out.texel_part, catch_all >= 0 ? catch_all : 0);
         if (kind == "colour" && spec.source.smoothing > 0)
             log_verbose("{}: colour regions smoothed over {} rounds", where, spec.source.smoothing);
     } else {
@@ -487,8 +552,11 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
         if (l >= 0) ++part_texels[std::size_t(l)];
     for (std::size_t p = 0; p < parts; ++p) {
         if (part_faces[p] == 0 || part_texels[p] == 0)
-            throw_error("{}.list[{}]: part '{}' has no faces{} (check its 'select' with `tdf parts`)", where, p,
-                        spec.parts[p].name, part_faces[p] == 0 ? "" : " large enough to cover a texel");
+            throw_error("{}.list[{}]: part '{}' has no faces{} (check its 'select' with `tdf parts`)",
+                        where,
+                        p,
+                        spec.parts[p].name,
+                        part_faces[p] == 0 ? "" : " large enough to cover a texel");
         out.part_fraction[p] = covered ? double(part_texels[p]) / double(covered) : 0.0;
     }
     for (std::size_t r = 0; r < src.names.size(); ++r) {

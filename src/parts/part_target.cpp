@@ -1,10 +1,9 @@
 // Composition of the per-part tactile targets over the atlas, and the label map exports.
-#include <tdf/parts/part_target.h>
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/io/image_io.h>
+#include <tdf/parts/part_target.h>
 
 #include <algorithm>
 #include <cmath>
@@ -77,7 +76,8 @@ std::vector<Image> lay_part_maps(const std::vector<PartTactile>& parts, int size
     for (std::size_t p = 0; p < parts.size(); ++p) {
         const PartTactile& part = parts[p];
         if (!part.map || part.map->empty()) throw_error("lay_part_maps: part {} has no tactile map", p);
-        if (part.map->channels() < 3) throw_error("lay_part_maps: part {}'s tactile map has {} channels", p, part.map->channels());
+        if (part.map->channels() < 3)
+            throw_error("lay_part_maps: part {}'s tactile map has {} channels", p, part.map->channels());
         if (!(part.uv_scale > 0) || !std::isfinite(part.uv_scale))
             throw_error("lay_part_maps: part {} has uv scale {}", p, part.uv_scale);
         Image layer(size, size, 3);
@@ -85,7 +85,8 @@ std::vector<Image> lay_part_maps(const std::vector<PartTactile>& parts, int size
             float texel[kMaxTextureChannels];
             for (std::size_t row = begin; row < end; ++row)
                 for (int col = 0; col < size; ++col) {
-                    const Vec2f uv{(float(col) + 0.5f) / float(size), 1.f - (float(row) + 0.5f) / float(size)};
+                    const Vec2f uv{(float(col) + 0.5f) / float(size),
+                                   1.f - (float(row) + 0.5f) / float(size)};
                     part.map->sample_bilinear(uv * part.uv_scale, texel);
                     const Vec3f n = safe_normalize(Vec3f{texel[0], texel[1], texel[2]});
                     float* out = layer.pixel(col, int(row));
@@ -99,15 +100,22 @@ std::vector<Image> lay_part_maps(const std::vector<PartTactile>& parts, int size
     return layers;
 }
 
-Image compose_part_target(const std::vector<int>& labels, int size, const std::vector<Image>& layers, float band) {
+Image compose_part_target(const std::vector<int>& labels, int size, const std::vector<Image>& layers,
+                          float band) {
     check_raster(labels, size, "compose_part_target");
     if (!(band >= 0.f && band <= 4.f)) throw_error("compose_part_target: band {} is not in [0, 4]", band);
     for (std::size_t p = 0; p < layers.size(); ++p)
         if (layers[p].width() != size || layers[p].height() != size || layers[p].channels() != 3)
-            throw_error("compose_part_target: layer {} is {}x{}x{}, expected {}x{}x3", p, layers[p].width(),
-                        layers[p].height(), layers[p].channels(), size, size);
+            throw_error("compose_part_target: layer {} is {}x{}x{}, expected {}x{}x3",
+                        p,
+                        layers[p].width(),
+                        layers[p].height(),
+                        layers[p].channels(),
+                        size,
+                        size);
     for (int l : labels)
-        if (l >= int(layers.size())) throw_error("compose_part_target: label {} but only {} layers", l, layers.size());
+        if (l >= int(layers.size()))
+            throw_error("compose_part_target: label {} but only {} layers", l, layers.size());
     std::vector<float> distance;
     std::vector<int> other;
     nearest_other(labels, size, int(std::ceil(band)) + 1, distance, other);
@@ -158,8 +166,8 @@ std::vector<int> downsample_labels(const std::vector<int>& labels, int size) {
     return out;
 }
 
-std::vector<Image> compose_part_pyramid(const std::vector<int>& labels, int size, const std::vector<Image>& layers,
-                                        float band) {
+std::vector<Image> compose_part_pyramid(const std::vector<int>& labels, int size,
+                                        const std::vector<Image>& layers, float band) {
     check_raster(labels, size, "compose_part_pyramid");
     if (size & (size - 1)) throw_error("compose_part_pyramid: size {} is not a power of two", size);
     std::vector<MipTexture> mips;
@@ -222,12 +230,15 @@ Image part_mask(const std::vector<int>& labels, int size, int part) {
 }
 
 PartBoundaryMeasure measure_part_boundary(const Image& composed, const std::vector<int>& labels, int size,
-                                          const std::vector<Image>& layers, float band, double tolerance_degrees) {
+                                          const std::vector<Image>& layers, float band,
+                                          double tolerance_degrees) {
     check_raster(labels, size, "measure_part_boundary");
     std::vector<float> distance;
     std::vector<int> other;
     nearest_other(labels, size, 6, distance, other);
-    const auto slope = [](Vec3f n) { return std::sqrt(double(n.x) * n.x + double(n.y) * n.y) / std::max(double(n.z), 1e-3); };
+    const auto slope = [](Vec3f n) {
+        return std::sqrt(double(n.x) * n.x + double(n.y) * n.y) / std::max(double(n.z), 1e-3);
+    };
     PartBoundaryMeasure m;
     double boundary_sum = 0, material_sum = 0, interior_sum = 0, detail_sum = 0, detail_reference = 0;
     std::size_t interior_pairs = 0;
@@ -281,12 +292,24 @@ Vec3f part_colour(int index) {
     const double v = 0.8;
     Vec3f rgb;
     switch (int(h)) {
-        case 0: rgb = {1, float(x), 0}; break;
-        case 1: rgb = {float(x), 1, 0}; break;
-        case 2: rgb = {0, 1, float(x)}; break;
-        case 3: rgb = {0, float(x), 1}; break;
-        case 4: rgb = {float(x), 0, 1}; break;
-        default: rgb = {1, 0, float(x)}; break;
+        case 0:
+            rgb = {1, float(x), 0};
+            break;
+        case 1:
+            rgb = {float(x), 1, 0};
+            break;
+        case 2:
+            rgb = {0, 1, float(x)};
+            break;
+        case 3:
+            rgb = {0, float(x), 1};
+            break;
+        case 4:
+            rgb = {float(x), 0, 1};
+            break;
+        default:
+            rgb = {1, 0, float(x)};
+            break;
     }
     return rgb * float(v);
 }
@@ -309,16 +332,20 @@ Json write_part_maps(const std::string& base, const std::vector<int>& labels, in
         std::size_t texels = 0;
         for (int l : labels) texels += l == int(p);
         const Vec3f c = part_colour(int(p));
-        legend.push_back({{"index", p},
-                          {"name", names[p]},
-                          {"colour", {int(std::lround(c.x * 255)), int(std::lround(c.y * 255)), int(std::lround(c.z * 255))}},
-                          {"texels", texels},
-                          {"fraction", covered ? double(texels) / double(covered) : 0.0},
-                          {"mask", base.substr(base.find_last_of('/') + 1) + "_mask_" + names[p] + ".png"}});
+        legend.push_back(
+            {{"index", p},
+             {"name", names[p]},
+             {"colour",
+              {int(std::lround(c.x * 255)), int(std::lround(c.y * 255)), int(std::lround(c.z * 255))}},
+             {"texels", texels},
+             {"fraction", covered ? double(texels) / double(covered) : 0.0},
+             {"mask", base.substr(base.find_last_of('/') + 1) + "_mask_" + names[p] + ".png"}});
         const Image mask = part_mask(dilated, size, int(p));
-        write_atomically(base + "_mask_" + names[p] + ".png", [&](const std::string& tmp) { write_png(tmp, mask); });
+        write_atomically(base + "_mask_" + names[p] + ".png",
+                         [&](const std::string& tmp) { write_png(tmp, mask); });
     }
-    write_text_atomically(base + "_label_legend.json", Json{{"size", size}, {"parts", legend}}.dump(2) + "\n");
+    write_text_atomically(base + "_label_legend.json",
+                          Json{{"size", size}, {"parts", legend}}.dump(2) + "\n");
     return legend;
 }
 

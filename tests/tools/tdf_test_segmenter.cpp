@@ -17,8 +17,10 @@ int main(int argc, char** argv) {
         std::string mode, request;
         for (int i = 1; i < argc; ++i) {
             const std::string a = argv[i];
-            if (a == "--fail" || a == "--skip") mode = a;
-            else request = a;
+            if (a == "--fail" || a == "--skip")
+                mode = a;
+            else
+                request = a;
         }
         if (mode == "--fail") {
             std::fprintf(stderr, "segmenter: failing on purpose\n");

@@ -1,5 +1,6 @@
 // Part segmentation: every parts source against known ground truth on a procedural sphere, the
 // shipped two-part scene (label accuracy >= 98 %), and one clear line per bad input.
+#include <gtest/gtest.h>
 #include <tdf/atlas/gutter.h>
 #include <tdf/atlas/uv_raster.h>
 #include <tdf/core/error.h>
@@ -9,13 +10,11 @@
 #include <tdf/render/scene_assets.h>
 #include <tdf/scene/procedural_mesh.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 
@@ -27,7 +26,8 @@ std::vector<int> truth(const TriangleMesh& mesh) {
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
         const Vec3i& t = mesh.triangles[f];
         const Vec3f c = (mesh.positions[std::size_t(t.x)] + mesh.positions[std::size_t(t.y)] +
-                         mesh.positions[std::size_t(t.z)]) * (1.f / 3.f);
+                         mesh.positions[std::size_t(t.z)]) *
+                        (1.f / 3.f);
         part[f] = c.y > 0.12f + 0.18f * std::sin(3.f * std::atan2(c.x, c.z)) ? 0 : 1;
     }
     return part;
@@ -78,7 +78,8 @@ struct PaintedSphere {
             const int f = raster.triangle[i];
             if (f < 0) continue;
             const float n = 0.05f * std::sin(float(i) * 12.9898f);
-            const Vec3f c = part[std::size_t(f)] == 0 ? Vec3f{0.25f + n, 0.5f + n, 0.22f} : Vec3f{0.7f + n, 0.4f, 0.26f + n};
+            const Vec3f c = part[std::size_t(f)] == 0 ? Vec3f{0.25f + n, 0.5f + n, 0.22f}
+                                                      : Vec3f{0.7f + n, 0.4f, 0.26f + n};
             for (int k = 0; k < 3; ++k) image.data()[i * 3 + std::size_t(k)] = c[k];
         }
         albedo = MipTexture(image);
@@ -119,7 +120,9 @@ TEST(ColourSegmentation, ChoosesKAndRejectsKAboveTheColours) {
     std::vector<Vec3f> rgb;
     for (int i = 0; i < 3000; ++i) {
         const float n = 0.04f * std::sin(float(i) * 1.7f);
-        rgb.push_back(i % 3 == 0 ? Vec3f{0.8f + n, 0.1f, 0.1f} : i % 3 == 1 ? Vec3f{0.1f, 0.7f + n, 0.1f} : Vec3f{0.1f, 0.1f, 0.8f + n});
+        rgb.push_back(i % 3 == 0   ? Vec3f{0.8f + n, 0.1f, 0.1f}
+                      : i % 3 == 1 ? Vec3f{0.1f, 0.7f + n, 0.1f}
+                                   : Vec3f{0.1f, 0.1f, 0.8f + n});
     }
     const std::vector<float> w(rgb.size(), 1.f);
     ColourClusteringOptions o;
@@ -136,11 +139,14 @@ TEST(ColourSegmentation, ChoosesKAndRejectsKAboveTheColours) {
         cluster_colours(two, std::vector<float>(4, 1.f), o, "scene.json: parts.source");
         ADD_FAILURE() << "k = 3 accepted for 2 colours";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("k is 3 but the albedo has only 2 distinct colour(s)"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find("k is 3 but the albedo has only 2 distinct colour(s)"),
+                  std::string::npos)
             << e.what();
     }
     o.k = 0;
-    EXPECT_THROW(cluster_colours(std::vector<Vec3f>(5, Vec3f{0.2f, 0.2f, 0.2f}), std::vector<float>(5, 1.f), o, "t"), Error);
+    EXPECT_THROW(
+        cluster_colours(std::vector<Vec3f>(5, Vec3f{0.2f, 0.2f, 0.2f}), std::vector<float>(5, 1.f), o, "t"),
+        Error);
 }
 
 TEST(ColourSegmentation, MajoritySmoothingRemovesIsolatedLabels) {
@@ -174,19 +180,23 @@ TEST(PartSegmentation, MeshGroupsByMaterialObjectAndGroup) {
     // By group: one region for two parts.
     spec.source.key = "group";
     spec.parts[0].select.clear();
-    EXPECT_NE(error_of(spec, s.input()).find("found 1 regions ('g1') but there are 2 parts"), std::string::npos)
+    EXPECT_NE(error_of(spec, s.input()).find("found 1 regions ('g1') but there are 2 parts"),
+              std::string::npos)
         << error_of(spec, s.input());
     // A select naming no region, and a part left with no faces.
     spec.source.key = "material";
     spec.parts[0].select = {"leaf"};
-    EXPECT_NE(error_of(spec, s.input()).find("test.json: parts.list[0].select: 'leaf' is not a region"), std::string::npos)
+    EXPECT_NE(error_of(spec, s.input()).find("test.json: parts.list[0].select: 'leaf' is not a region"),
+              std::string::npos)
         << error_of(spec, s.input());
     spec.parts[0].select = {"green", "clay"};
-    EXPECT_NE(error_of(spec, s.input()).find("part 'base' has no faces"), std::string::npos) << error_of(spec, s.input());
+    EXPECT_NE(error_of(spec, s.input()).find("part 'base' has no faces"), std::string::npos)
+        << error_of(spec, s.input());
     // Without groups the mesh source says so.
     s.mesh.face_groups.clear();
     s.mesh.face_group.clear();
-    EXPECT_NE(error_of(two_parts("mesh"), s.input()).find("has no objects, groups or materials"), std::string::npos);
+    EXPECT_NE(error_of(two_parts("mesh"), s.input()).find("has no objects, groups or materials"),
+              std::string::npos);
 }
 
 TEST(PartSegmentation, FaceLabelFile) {
@@ -221,7 +231,7 @@ TEST(PartSegmentation, LabelImageInTheMeshUvSpace) {
         const int f = raster.triangle[i];
         if (f >= 0) labels.data()[i * 3 + (s.part[std::size_t(f)] == 0 ? 0 : 1)] = 1.f;
     }
-    dilate_gutter(labels, raster.triangle, 4);  // painted past the chart borders, as a label image is
+    dilate_gutter(labels, raster.triangle, 4);       // painted past the chart borders, as a label image is
     labels.at(5, 5, 0) = labels.at(5, 5, 1) = 0.5f;  // one blended texel
     const std::string path = test::scratch_dir() + "/labels.png";
     write_png(path, labels);
@@ -239,7 +249,8 @@ TEST(PartSegmentation, LabelImageInTheMeshUvSpace) {
     write_png(test::scratch_dir() + "/small.png", Image(64, 64, 3, 1.f));
     spec.source.image = test::scratch_dir() + "/small.png";
     EXPECT_NE(error_of(spec, s.input()).find("parts.source.image: '"), std::string::npos);
-    EXPECT_NE(error_of(spec, s.input()).find("is 64x64 but the mesh's albedo texture is 128x128"), std::string::npos)
+    EXPECT_NE(error_of(spec, s.input()).find("is 64x64 but the mesh's albedo texture is 128x128"),
+              std::string::npos)
         << error_of(spec, s.input());
 }
 
@@ -259,13 +270,17 @@ TEST(PartSegmentation, ColourClustersTheAlbedoAndReportsThem) {
     EXPECT_EQ(report["regions"].size(), 2u);
     EXPECT_TRUE(report["regions"][0].contains("hex"));
     EXPECT_TRUE(report.contains("silhouette_by_k"));
-    EXPECT_NEAR(report["regions"][0]["fraction"].get<double>() + report["regions"][1]["fraction"].get<double>(), 1.0, 1e-9);
+    EXPECT_NEAR(
+        report["regions"][0]["fraction"].get<double>() + report["regions"][1]["fraction"].get<double>(),
+        1.0,
+        1e-9);
     // K larger than the colours present: a constant albedo has one.
     spec.source.k = 3;
     SurfaceMaterial grey;
     PartSegmentationInput in = s.input();
     in.material = &grey;
-    EXPECT_NE(error_of(spec, in).find("test.json: parts.source: k is 3 but the albedo has only 1 distinct colour(s)"),
+    EXPECT_NE(error_of(spec, in).find(
+                  "test.json: parts.source: k is 3 but the albedo has only 1 distinct colour(s)"),
               std::string::npos)
         << error_of(spec, in);
 }
@@ -283,10 +298,12 @@ TEST(PartSegmentation, ExternalProgramThroughTheFileProtocol) {
     const double accuracy = double(right) / double(s.part.size());
     EXPECT_GE(accuracy, 0.97) << accuracy;
     spec.source.external["command"] = Json::array({TDF_TEST_SEGMENTER, "--fail", "{request}"});
-    EXPECT_NE(error_of(spec, s.input()).find("failed (exit 3"), std::string::npos) << error_of(spec, s.input());
+    EXPECT_NE(error_of(spec, s.input()).find("failed (exit 3"), std::string::npos)
+        << error_of(spec, s.input());
     EXPECT_NE(error_of(spec, s.input()).find("failing on purpose"), std::string::npos);
     spec.source.external["command"] = Json::array({TDF_TEST_SEGMENTER, "--skip", "{request}"});
-    EXPECT_NE(error_of(spec, s.input()).find("did not write"), std::string::npos) << error_of(spec, s.input());
+    EXPECT_NE(error_of(spec, s.input()).find("did not write"), std::string::npos)
+        << error_of(spec, s.input());
 }
 
 TEST(PartSegmentation, ShippedTwoPartSceneColourAccuracy) {
@@ -307,9 +324,12 @@ TEST(PartSegmentation, ShippedTwoPartSceneColourAccuracy) {
     truth_spec.parts[1].select = {"base"};
     const PartSegmentation truth = segment_parts(truth_spec, in);
     const double accuracy = texel_accuracy(colour.texel_part, truth.texel_part);
-    std::printf("two_part_sphere colour segmentation: %.4f of %zu foreground texels right, K = %zu, %.2f s\n", accuracy,
-                std::size_t(std::count_if(truth.texel_part.begin(), truth.texel_part.end(), [](int l) { return l >= 0; })),
-                colour.regions.size(), colour.seconds);
+    std::printf("two_part_sphere colour segmentation: %.4f of %zu foreground texels right, K = %zu, %.2f s\n",
+                accuracy,
+                std::size_t(std::count_if(
+                    truth.texel_part.begin(), truth.texel_part.end(), [](int l) { return l >= 0; })),
+                colour.regions.size(),
+                colour.seconds);
     EXPECT_GE(accuracy, 0.98);
     // The mesh's own materials and the label image are the ground truth exactly.
     PartsSpec mesh_spec = truth_spec;
@@ -341,12 +361,18 @@ TEST(PartSegmentation, SpotPatchesFromColourOnTheRealMesh) {
     std::vector<int> dark(raster.texel_count(), -1);
     for (std::size_t i = 0; i < dark.size(); ++i)
         if (raster.triangle[i] >= 0)
-            dark[i] = srgb_to_lab(albedo_at(assets->mesh, assets->material, raster.triangle[i], raster.barycentric[i])).x < 36.f
-                          ? 1
-                          : 0;
+            dark[i] =
+                srgb_to_lab(
+                    albedo_at(assets->mesh, assets->material, raster.triangle[i], raster.barycentric[i]))
+                            .x < 36.f
+                    ? 1
+                    : 0;
     const double accuracy = texel_accuracy(seg.texel_part, dark);
-    std::printf("spot patches: %.4f of foreground texels agree with the L* < 36 rule, patches %.2f %%, %.2f s\n", accuracy,
-                100.0 * seg.part_fraction[1], seg.seconds);
+    std::printf(
+        "spot patches: %.4f of foreground texels agree with the L* < 36 rule, patches %.2f %%, %.2f s\n",
+        accuracy,
+        100.0 * seg.part_fraction[1],
+        seg.seconds);
     EXPECT_GE(accuracy, 0.98);
     EXPECT_GT(seg.part_fraction[1], 0.05);
     EXPECT_LT(seg.part_fraction[1], 0.2);

@@ -1,16 +1,15 @@
 // The composed multi-part tactile target: bleeding and seams at part boundaries (measured),
 // mip levels that do not mix parts, and the label map / mask exports.
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/core/rng.h>
 #include <tdf/io/image_io.h>
 #include <tdf/parts/part_target.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <fstream>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 
@@ -24,7 +23,9 @@ Image random_normals(std::uint64_t seed, int size, float amplitude) {
         float phase, a;
     };
     std::vector<Wave> waves;
-    for (int k = 0; k < 12; ++k) waves.push_back({rng.uniform_int(1, 9), rng.uniform_int(1, 9), rng.uniform(0.f, 6.28f), rng.uniform(0.5f, 1.f)});
+    for (int k = 0; k < 12; ++k)
+        waves.push_back(
+            {rng.uniform_int(1, 9), rng.uniform_int(1, 9), rng.uniform(0.f, 6.28f), rng.uniform(0.5f, 1.f)});
     Image img(size, size, 3);
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
@@ -47,7 +48,9 @@ std::vector<int> disc_labels(int size) {
         for (int x = 0; x < size; ++x) {
             const float dx = float(x) + 0.5f - float(size) / 2, dy = float(y) + 0.5f - float(size) / 2;
             l[std::size_t(y) * std::size_t(size) + std::size_t(x)] =
-                y >= size - 4 ? -1 : dx * dx + dy * dy < float(size * size) * 0.09f ? 0 : 1;
+                y >= size - 4                                    ? -1
+                : dx * dx + dy * dy < float(size * size) * 0.09f ? 0
+                                                                 : 1;
         }
     return l;
 }
@@ -75,10 +78,18 @@ TEST(PartTarget, BoundaryBleedsAtMostTwoTexelsWithoutAVisibleSeam) {
     const Image soft = compose_part_target(labels, size, layers);
     const PartBoundaryMeasure h = measure_part_boundary(hard, labels, size, layers);
     const PartBoundaryMeasure s = measure_part_boundary(soft, labels, size, layers);
-    for (const auto& [what, r] : {std::pair<const char*, PartBoundaryMeasure>{"hard cut", h}, {"band 1.5", s}})
-        std::printf("%-8s bleed %.2f texels, boundary step %.3f deg (hard cut %.3f, ratio %.2f), band detail %.3f, "
-                    "interior step %.3f deg\n", what, r.bleed_texels, r.boundary_step_degrees, r.hard_step_degrees,
-                    r.step_ratio, r.band_detail_ratio, r.interior_step_degrees);
+    for (const auto& [what, r] :
+         {std::pair<const char*, PartBoundaryMeasure>{"hard cut", h}, {"band 1.5", s}})
+        std::printf(
+            "%-8s bleed %.2f texels, boundary step %.3f deg (hard cut %.3f, ratio %.2f), band detail %.3f, "
+            "interior step %.3f deg\n",
+            what,
+            r.bleed_texels,
+            r.boundary_step_degrees,
+            r.hard_step_degrees,
+            r.step_ratio,
+            r.band_detail_ratio,
+            r.interior_step_degrees);
     EXPECT_EQ(h.bleed_texels, 0.0);
     EXPECT_NEAR(h.step_ratio, 1.0, 1e-9);
     EXPECT_LE(s.bleed_texels, 2.0);
@@ -90,7 +101,9 @@ TEST(PartTarget, BoundaryBleedsAtMostTwoTexelsWithoutAVisibleSeam) {
     // A plain average of the normals would flatten the band: the slope blend is what avoids it.
     const Vec3f a3{0.3f, 0.f, 1.f}, b3{-0.3f, 0.f, 1.f};
     EXPECT_NEAR(blend_normals(a3, b3, 1.f).x, safe_normalize(a3).x, 1e-6f);
-    EXPECT_NEAR(blend_normals(a3, b3, 0.75f).x / blend_normals(a3, b3, 0.75f).z, 0.3f * 0.5f / std::sqrt(0.625f), 1e-5f);
+    EXPECT_NEAR(blend_normals(a3, b3, 0.75f).x / blend_normals(a3, b3, 0.75f).z,
+                0.3f * 0.5f / std::sqrt(0.625f),
+                1e-5f);
     // Unit normals everywhere, flat on the background.
     for (std::size_t i = 0; i < labels.size(); ++i) {
         const float* p = soft.data() + i * 3;
@@ -127,7 +140,8 @@ TEST(PartTarget, PyramidMixesPartsOnlyAtTheBoundary) {
             for (int dy = -2; dy <= 2; ++dy)
                 for (int dx = -2; dx <= 2; ++dx) {
                     const int sx = x + dx, sy = y + dy;
-                    if (sx >= 0 && sy >= 0 && sx < s3 && sy < s3 && l3[std::size_t(sy) * std::size_t(s3) + std::size_t(sx)] != own &&
+                    if (sx >= 0 && sy >= 0 && sx < s3 && sy < s3 &&
+                        l3[std::size_t(sy) * std::size_t(s3) + std::size_t(sx)] != own &&
                         l3[std::size_t(sy) * std::size_t(s3) + std::size_t(sx)] >= 0)
                         interior = false;
                 }
@@ -164,7 +178,7 @@ TEST(PartTarget, WritesLabelMapLegendAndMasks) {
     ASSERT_EQ(map.width(), size);
     EXPECT_EQ(map.at(16, 16, 0), 1.f);  // part 0 red (spec 7.4: R = part A)
     EXPECT_EQ(map.at(16, 16, 1), 0.f);
-    EXPECT_EQ(map.at(1, 1, 1), 1.f);  // part 1 green
+    EXPECT_EQ(map.at(1, 1, 1), 1.f);         // part 1 green
     EXPECT_EQ(map.at(1, size - 3, 1), 1.f);  // background row inside the 2-texel gutter: dilated
     EXPECT_EQ(map.at(1, size - 1, 1), 0.f);  // beyond it: black
     const Image cap = read_image(base + "_mask_cap.png");

@@ -15,18 +15,18 @@ namespace tdf {
 Vec3f srgb_to_lab(Vec3f rgb);
 
 struct ColourClusteringOptions {
-    int k = 0;            ///< clusters; 0 = choose in [2, k_max] by the largest mean silhouette
-    int k_max = 6;        ///< [2, 16]
-    int iterations = 30;  ///< Lloyd iterations (stops earlier when no assignment changes)
-    std::uint64_t seed = 0;  ///< k-means++ seeding and the silhouette subsample
-    int sample_limit = 20000;  ///< k-means runs on at most this many samples (every sample is assigned)
+    int k = 0;                      ///< clusters; 0 = choose in [2, k_max] by the largest mean silhouette
+    int k_max = 6;                  ///< [2, 16]
+    int iterations = 30;            ///< Lloyd iterations (stops earlier when no assignment changes)
+    std::uint64_t seed = 0;         ///< k-means++ seeding and the silhouette subsample
+    int sample_limit = 20000;       ///< k-means runs on at most this many samples (every sample is assigned)
     int silhouette_samples = 1500;  ///< points used for the silhouette when choosing K
 };
 
 /// One colour cluster.
 struct ColourCluster {
-    Vec3f lab;        ///< mean CIELAB of its samples
-    Vec3f rgb;        ///< mean sRGB in [0, 1]
+    Vec3f lab;          ///< mean CIELAB of its samples
+    Vec3f rgb;          ///< mean sRGB in [0, 1]
     double weight = 0;  ///< sum of the sample weights assigned to it
 };
 
@@ -49,7 +49,8 @@ ColourClustering cluster_colours(const std::vector<Vec3f>& rgb, const std::vecto
 /// summed edge weight among its neighbours plus itself (its own vote weighted `self_weight`);
 /// ties keep the current label. Nodes with label < 0 neither vote nor change. `neighbours[i]`
 /// lists (node, weight) pairs. Synchronous updates, so the result is order-independent.
-void majority_smooth(std::vector<int>& label, const std::vector<std::vector<std::pair<int, float>>>& neighbours,
-                     int rounds, float self_weight = 1.f);
+void majority_smooth(std::vector<int>& label,
+                     const std::vector<std::vector<std::pair<int, float>>>& neighbours, int rounds,
+                     float self_weight = 1.f);
 
 }  // namespace tdf

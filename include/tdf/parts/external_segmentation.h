@@ -14,13 +14,13 @@
 namespace tdf {
 
 struct ExternalSegmentationInput {
-    const TriangleMesh* mesh = nullptr;       ///< normalised to about [-1, 1] (the views orbit at radius 3)
+    const TriangleMesh* mesh = nullptr;  ///< normalised to about [-1, 1] (the views orbit at radius 3)
     const SurfaceMaterial* material = nullptr;
     std::vector<std::string> part_names;
-    std::vector<std::string> prompts;         ///< per part, "" = the part's name
-    std::string work_folder;                  ///< parent of the call folder ("" = system temp)
-    std::string where;                        ///< names the settings in messages
-    int smoothing = 3;                        ///< rounds of face-adjacency majority smoothing
+    std::vector<std::string> prompts;  ///< per part, "" = the part's name
+    std::string work_folder;           ///< parent of the call folder ("" = system temp)
+    std::string where;                 ///< names the settings in messages
+    int smoothing = 3;                 ///< rounds of face-adjacency majority smoothing
 };
 
 /// Runs the program once for all views and returns the part of every face. `config` keys

@@ -33,14 +33,14 @@ struct PartRegion {
     int part = -1;        ///< the part it went to
     double fraction = 0;  ///< share of the covered atlas texels, [0, 1]
     bool has_colour = false;
-    Vec3f rgb{};          ///< colour and label_image: mean sRGB in [0, 1] (colour) or the key colour
-    Vec3f lab{};          ///< colour: mean CIELAB
+    Vec3f rgb{};  ///< colour and label_image: mean sRGB in [0, 1] (colour) or the key colour
+    Vec3f lab{};  ///< colour: mean CIELAB
 };
 
 struct PartSegmentation {
     std::vector<std::string> part_names;
-    std::vector<int> face_part;   ///< per face of the mesh, in [0, part count)
-    int size = 0;                 ///< side of the texel raster
+    std::vector<int> face_part;  ///< per face of the mesh, in [0, part count)
+    int size = 0;                ///< side of the texel raster
     /// Per atlas texel (index i * size + j, UvRaster convention), the part, or -1 for texels no
     /// face covers (gutter and background).
     std::vector<int> texel_part;
@@ -63,9 +63,9 @@ struct PartSegmentationInput {
     const TriangleMesh* mesh = nullptr;
     const TriangleMesh* atlas = nullptr;
     const SurfaceMaterial* material = nullptr;
-    int size = 1024;             ///< texel raster side (the trained maps' size), [16, 16384]
-    std::uint64_t seed = 0;      ///< colour clustering
-    std::string where;           ///< names the scene in messages, e.g. "scenes/x.json: parts"
+    int size = 1024;         ///< texel raster side (the trained maps' size), [16, 16384]
+    std::uint64_t seed = 0;  ///< colour clustering
+    std::string where;       ///< names the scene in messages, e.g. "scenes/x.json: parts"
     /// external: folder for the call files (default: the system temp folder)
     std::string work_folder;
 };

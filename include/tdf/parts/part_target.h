@@ -43,8 +43,8 @@ Image compose_part_target(const std::vector<int>& labels, int size, const std::v
 /// 2x2 majority, instead of box-filtering the composite (which averages the two materials over
 /// ever wider bands). Level 0 equals compose_part_target. Sizes: size, size/2, ... 1 (size a
 /// power of two).
-std::vector<Image> compose_part_pyramid(const std::vector<int>& labels, int size, const std::vector<Image>& layers,
-                                        float band = kDefaultPartBand);
+std::vector<Image> compose_part_pyramid(const std::vector<int>& labels, int size,
+                                        const std::vector<Image>& layers, float band = kDefaultPartBand);
 
 /// 2x2 majority of a label raster (ties: the lowest label; -1 only when all four are -1).
 std::vector<int> downsample_labels(const std::vector<int>& labels, int size);
