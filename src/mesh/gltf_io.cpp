@@ -224,7 +224,8 @@ struct Builder {
 // `group` says where the primitive came from; it is recorded as a FaceGroup when the primitive
 // adds faces.
 void add_primitive(Builder& b, const GltfReader& reader, const tinygltf::Model& model,
-                   const tinygltf::Primitive& prim, const Mat4d& m, const std::string& path, FaceGroup group) {
+                   const tinygltf::Primitive& prim, const Mat4d& m, const std::string& path,
+                   FaceGroup group) {
     if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != -1) {
         log_warning("{}: skipping a primitive with mode {} (only triangles are read)", path, prim.mode);
         return;

@@ -1,11 +1,10 @@
 // Wavefront OBJ/MTL reading. Hand-written rather than tinyobjloader because the reference's
 // semantics matter (separate position/UV index buffers, the last map_Kd wins, xyzrgb vertices,
 // its MTL search order, spec 1.2) and every error must name the file and line.
-#include <tdf/mesh/mesh_io.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
+#include <tdf/mesh/mesh_io.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -197,9 +196,11 @@ TriangleMesh load_obj(const std::string& path, const MeshLoadOptions& options) {
             if (!mesh.triangles.empty() && has_uv != !mesh.uv_triangles.empty())
                 parser.fail("some faces have texture coordinates and others do not");
             if (group_changed) {
-                const auto same = std::find_if(mesh.face_groups.begin(), mesh.face_groups.end(), [&](const FaceGroup& g) {
-                    return g.object == current.object && g.group == current.group && g.material == current.material;
-                });
+                const auto same =
+                    std::find_if(mesh.face_groups.begin(), mesh.face_groups.end(), [&](const FaceGroup& g) {
+                        return g.object == current.object && g.group == current.group &&
+                               g.material == current.material;
+                    });
                 current_group = int(same - mesh.face_groups.begin());
                 if (same == mesh.face_groups.end()) mesh.face_groups.push_back(current);
                 group_changed = false;
@@ -214,7 +215,9 @@ TriangleMesh load_obj(const std::string& path, const MeshLoadOptions& options) {
         } else if (keyword == "o" || keyword == "g" || keyword == "usemtl") {
             // "g a b" names several groups at once; the whole rest of the line is the key.
             const std::string name(parser.rest_trimmed());
-            std::string& field = keyword == "o" ? current.object : keyword == "g" ? current.group : current.material;
+            std::string& field = keyword == "o"   ? current.object
+                                 : keyword == "g" ? current.group
+                                                  : current.material;
             if (field != name) group_changed = true;
             field = name;
             any_group_statement = true;

@@ -102,7 +102,8 @@ TEST(ObjIo, RecordsObjectsGroupsAndMaterialsPerFace) {
     EXPECT_EQ(mesh.face_groups[2].material, "clay");
     EXPECT_EQ(mesh.face_groups[2].gltf_node, -1);
     // No o/g/usemtl: no structure.
-    EXPECT_TRUE(load_obj(write_file("plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).face_groups.empty());
+    EXPECT_TRUE(
+        load_obj(write_file("plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).face_groups.empty());
 }
 
 TEST(ObjIo, ValidateRejectsInconsistentFaceGroups) {

@@ -69,8 +69,8 @@ struct PartSpec {
     std::string name;                         ///< [A-Za-z0-9_-]+, unique; names the mask files
     std::vector<std::string> tactile_images;  ///< resolved paths (at least one)
     PartLayoutSpec layout;
-    std::string prompt;                       ///< guidance prompt ("" = the trainer's default)
-    Json guidance = Json::object();           ///< raw per-part guidance settings (the trainer's)
+    std::string prompt;              ///< guidance prompt ("" = the trainer's default)
+    Json guidance = Json::object();  ///< raw per-part guidance settings (the trainer's)
     /// Which regions of the source belong to this part: material/object/group names (mesh),
     /// "#rrggbb" colours (label_image), labels (face_labels), cluster indices (colour), mask
     /// indices (external). Empty: see PartsSpec.
@@ -81,12 +81,12 @@ struct PartSpec {
 struct PartsSourceSpec {
     /// mesh | label_image | face_labels | colour | external
     std::string kind = "mesh";
-    std::string key = "material";  ///< mesh: material | object | group | primitive
-    std::string image;             ///< label_image: resolved path of an image in the mesh's UV space
-    std::string file;              ///< face_labels: resolved path of the per-face label file
-    int k = 0;                     ///< colour: clusters; 0 = choose in [2, k_max]
-    int k_max = 6;                 ///< colour: largest K tried when k = 0, [2, 16]
-    int smoothing = 3;             ///< colour / external: rounds of neighbourhood majority, [0, 50]
+    std::string key = "material";    ///< mesh: material | object | group | primitive
+    std::string image;               ///< label_image: resolved path of an image in the mesh's UV space
+    std::string file;                ///< face_labels: resolved path of the per-face label file
+    int k = 0;                       ///< colour: clusters; 0 = choose in [2, k_max]
+    int k_max = 6;                   ///< colour: largest K tried when k = 0, [2, 16]
+    int smoothing = 3;               ///< colour / external: rounds of neighbourhood majority, [0, 50]
     Json external = Json::object();  ///< external: the program settings (docs/parts-protocol.md)
 };
 
