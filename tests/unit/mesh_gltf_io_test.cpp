@@ -159,6 +159,11 @@ TEST(GltfIo, LoadsTheAvocadoWithItsBaseColourTexture) {
     EXPECT_LT(b.extent().x, b.extent().y);
     // Welding: fewer positions than UV vertices (glTF splits vertices at UV seams).
     EXPECT_LT(mesh.positions.size(), mesh.uvs.size());
+    // One node, mesh and primitive with material "2256_Avocado_d": one group for every face.
+    ASSERT_EQ(mesh.face_groups.size(), 1u);
+    EXPECT_EQ(mesh.face_groups[0].material, "2256_Avocado_d");
+    EXPECT_EQ(mesh.face_groups[0].group, "Avocado");
+    EXPECT_EQ(mesh.face_group, std::vector<int>(682, 0));
 }
 
 TEST(GltfIo, RecordsNodeMeshPrimitiveAndMaterialPerFace) {
