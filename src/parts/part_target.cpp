@@ -166,33 +166,6 @@ std::vector<int> downsample_labels(const std::vector<int>& labels, int size) {
     return out;
 }
 
-std::vector<Image> compose_part_pyramid(const std::vector<int>& labels, int size,
-                                        const std::vector<Image>& layers, float band) {
-    check_raster(labels, size, "compose_part_pyramid");
-    if (size & (size - 1)) throw_error("compose_part_pyramid: size {} is not a power of two", size);
-    std::vector<MipTexture> mips;
-    for (const Image& layer : layers) mips.emplace_back(layer);
-    std::vector<Image> out;
-    std::vector<int> level_labels = labels;
-    for (int level = 0, s = size; s >= 1; ++level, s /= 2) {
-        std::vector<Image> level_layers;
-        for (const MipTexture& m : mips) {
-            Image l = m.level(level);
-            // Box filtering shortens normals; renormalise like the shading does.
-            for (std::size_t i = 0; level > 0 && i < l.pixel_count(); ++i) {
-                const Vec3f n = safe_normalize(texel3(l, i));
-                l.data()[i * 3] = n.x;
-                l.data()[i * 3 + 1] = n.y;
-                l.data()[i * 3 + 2] = n.z;
-            }
-            level_layers.push_back(std::move(l));
-        }
-        out.push_back(compose_part_target(level_labels, s, level_layers, band));
-        if (s > 1) level_labels = downsample_labels(level_labels, s);
-    }
-    return out;
-}
-
 std::vector<int> dilate_labels(const std::vector<int>& labels, int size, int texels) {
     check_raster(labels, size, "dilate_labels");
     std::vector<int> current = labels;

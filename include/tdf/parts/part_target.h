@@ -38,13 +38,11 @@ constexpr float kDefaultPartBand = 1.5f;
 Image compose_part_target(const std::vector<int>& labels, int size, const std::vector<Image>& layers,
                           float band = kDefaultPartBand);
 
-/// A mip pyramid of the composed target in which parts mix no more than at level 0: level k
-/// composes the box-filtered layers (MipTexture levels of each layer) with labels reduced by
-/// 2x2 majority, instead of box-filtering the composite (which averages the two materials over
-/// ever wider bands). Level 0 equals compose_part_target. Sizes: size, size/2, ... 1 (size a
-/// power of two).
-std::vector<Image> compose_part_pyramid(const std::vector<int>& labels, int size,
-                                        const std::vector<Image>& layers, float band = kDefaultPartBand);
+/// Mip levels: the ordinary box-filtered pyramid of the composite (MipTexture) is what to use.
+/// A coarse texel then mixes two parts only when its footprint at level 0 holds texels of both
+/// or of the blend band, in proportion to their areas, which is needed (the footprint does show
+/// both materials); composing every level from per-part pyramids with a band of its own mixes
+/// MORE (measured in PartTarget.BoxPyramidMixesPartsOnlyWhereTheFootprintHoldsBoth).
 
 /// 2x2 majority of a label raster (ties: the lowest label; -1 only when all four are -1).
 std::vector<int> downsample_labels(const std::vector<int>& labels, int size);
