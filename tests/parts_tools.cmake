@@ -19,7 +19,7 @@ set(_parts_out ${PROJECT_BINARY_DIR}/test-scratch/parts_cli)
 add_test(NAME PartsCli.TwoPartSphereWritesLabelMapMasksAndReport
          COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 256)
 set_tests_properties(PartsCli.TwoPartSphereWritesLabelMapMasksAndReport PROPERTIES LABELS unit
-                     PASS_REGULAR_EXPRESSION "0 cap +44\\.[0-9]+ %.*1 base +55\\.[0-9]+ %.*wrote .*two_part_sphere_label_map.png")
+                     PASS_REGULAR_EXPRESSION "0 cap +42\\.[0-9]+ %.*1 base +57\\.[0-9]+ %.*wrote .*two_part_sphere_label_map.png")
 add_test(NAME PartsCli.SceneWithoutPartsFails
          COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/pebble_sphere/scene.json -o ${_parts_out})
 set_tests_properties(PartsCli.SceneWithoutPartsFails PROPERTIES LABELS unit

@@ -203,7 +203,7 @@ void smooth_texel_labels(std::vector<int>& label, int size, int rounds, int clas
 }
 
 SourceRegions colour_regions(const PartsSpec& spec, const PartSegmentationInput& in, const UvRaster& raster,
-                             const std::string& where) {
+                             const std::vector<double>& texel_area, const std::string& where) {
     const TriangleMesh& mesh = *in.mesh;
     std::vector<std::size_t> texels;
     for (std::size_t i = 0; i < raster.texel_count(); ++i)
@@ -219,8 +219,13 @@ SourceRegions colour_regions(const PartsSpec& spec, const PartSegmentationInput&
     options.k = spec.source.k;
     options.k_max = spec.source.k_max;
     options.seed = in.seed;
-    const ColourClustering clustering =
-        cluster_colours(rgb, std::vector<float>(rgb.size(), 1.f), options, where + ".source");
+    // Weighted by surface area, so clusters are ranked by area even on atlases of uneven density.
+    std::vector<float> weight(texels.size());
+    double mean = 0;
+    for (std::size_t k = 0; k < texels.size(); ++k) mean += texel_area[texels[k]];
+    mean = texels.empty() ? 1.0 : mean / double(texels.size());
+    for (std::size_t k = 0; k < texels.size(); ++k) weight[k] = float(texel_area[texels[k]] / (mean > 0 ? mean : 1.0));
+    const ColourClustering clustering = cluster_colours(rgb, weight, options, where + ".source");
     SourceRegions r;
     r.texel.assign(raster.texel_count(), -1);
     for (std::size_t k = 0; k < texels.size(); ++k) r.texel[texels[k]] = clustering.label[k];
@@ -411,6 +416,23 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
     UvRaster raster = rasterize_uv(*in.atlas, in.size);
     add_partial_texels(*in.atlas, raster);
 
+    // Region sizes as surface area (for messages and the report): each texel carries its face's
+    // 3-D area divided by the face's texel count, so atlases of uneven density report true areas.
+    std::vector<double> texel_area(raster.texel_count(), 0.0);
+    {
+        std::vector<std::size_t> face_texels(in.mesh->triangles.size(), 0);
+        for (int f : raster.triangle)
+            if (f >= 0) ++face_texels[std::size_t(f)];
+        for (std::size_t i = 0; i < texel_area.size(); ++i) {
+            const int f = raster.triangle[i];
+            if (f < 0) continue;
+            const Vec3i& t = in.mesh->triangles[std::size_t(f)];
+            const Vec3f p0 = in.mesh->positions[std::size_t(t.x)];
+            const double area = 0.5 * double(length(cross(in.mesh->positions[std::size_t(t.y)] - p0,
+                                                          in.mesh->positions[std::size_t(t.z)] - p0)));
+            texel_area[i] = area / double(face_texels[std::size_t(f)]);
+        }
+    }
     SourceRegions src;
     const std::string& kind = spec.source.kind;
     if (kind == "mesh") {
@@ -420,7 +442,7 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
     } else if (kind == "label_image") {
         src = label_image_regions(spec, in, raster, where);
     } else if (kind == "colour") {
-        src = colour_regions(spec, in, raster, where);
+        src = colour_regions(spec, in, raster, texel_area, where);
     } else if (kind == "external") {
         ExternalSegmentationInput ext;
         ext.mesh = in.mesh;
@@ -452,21 +474,18 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
         else
             any_select = true;
     }
-    // Region sizes in texels (for messages and the report).
-    std::vector<std::size_t> region_texels(src.names.size(), 0);
-    std::size_t covered = 0;
+    std::vector<double> region_area(src.names.size(), 0.0);
+    double covered = 0;
     {
         const std::vector<int> texel_region =
             src.texel.empty() ? texel_labels_from_faces(raster, src.face) : src.texel;
-        for (int r : texel_region)
-            if (r >= 0) {
-                ++region_texels[std::size_t(r)];
-                ++covered;
+        for (std::size_t i = 0; i < texel_region.size(); ++i)
+            if (texel_region[i] >= 0) {
+                region_area[std::size_t(texel_region[i])] += texel_area[i];
+                covered += texel_area[i];
             }
     }
-    const auto fraction = [&](std::size_t r) {
-        return covered ? double(region_texels[r]) / double(covered) : 0.0;
-    };
+    const auto fraction = [&](std::size_t r) { return covered > 0 ? region_area[r] / covered : 0.0; };
     if (!any_select) {
         if (src.names.size() != parts)
             throw_error(
@@ -548,8 +567,12 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
     out.part_fraction.assign(parts, 0.0);
     std::vector<std::size_t> part_faces(parts, 0), part_texels(parts, 0);
     for (int l : out.face_part) ++part_faces[std::size_t(l)];
-    for (int l : out.texel_part)
-        if (l >= 0) ++part_texels[std::size_t(l)];
+    std::vector<double> part_area(parts, 0.0);
+    for (std::size_t i = 0; i < out.texel_part.size(); ++i)
+        if (out.texel_part[i] >= 0) {
+            ++part_texels[std::size_t(out.texel_part[i])];
+            part_area[std::size_t(out.texel_part[i])] += texel_area[i];
+        }
     for (std::size_t p = 0; p < parts; ++p) {
         if (part_faces[p] == 0 || part_texels[p] == 0)
             throw_error("{}.list[{}]: part '{}' has no faces{} (check its 'select' with `tdf parts`)",
@@ -557,7 +580,7 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
                         p,
                         spec.parts[p].name,
                         part_faces[p] == 0 ? "" : " large enough to cover a texel");
-        out.part_fraction[p] = covered ? double(part_texels[p]) / double(covered) : 0.0;
+        out.part_fraction[p] = covered > 0 ? part_area[p] / covered : 0.0;
     }
     for (std::size_t r = 0; r < src.names.size(); ++r) {
         PartRegion info = src.info[r];

@@ -344,7 +344,7 @@ TEST(PartSegmentation, ShippedTwoPartSceneColourAccuracy) {
 }
 
 TEST(PartSegmentation, SpotPatchesFromColourOnTheRealMesh) {
-    // scenes/spot_parts: the cow's dark patches from colour alone (K = 6, cluster 2) against an
+    // scenes/spot_parts: the cow's dark patches from colour alone (K = 6, cluster 3) against an
     // independent rule on the same texture: texels darker than L* = 36 are patches.
     TDF_REQUIRE_SHARED_DATA("meshes/spot/spot_triangulated.obj");
     const std::string scene = test::source_dir() + "/scenes/spot_parts/scene.json";

@@ -31,7 +31,7 @@ namespace tdf {
 struct PartRegion {
     std::string name;     ///< see the source kinds above
     int part = -1;        ///< the part it went to
-    double fraction = 0;  ///< share of the covered atlas texels, [0, 1]
+    double fraction = 0;  ///< share of the surface area (of faces covering a texel), [0, 1]
     bool has_colour = false;
     Vec3f rgb{};  ///< colour and label_image: mean sRGB in [0, 1] (colour) or the key colour
     Vec3f lab{};  ///< colour: mean CIELAB
@@ -45,7 +45,7 @@ struct PartSegmentation {
     /// face covers (gutter and background).
     std::vector<int> texel_part;
     std::vector<PartRegion> regions;
-    std::vector<double> part_fraction;  ///< share of covered texels per part
+    std::vector<double> part_fraction;  ///< share of the surface area per part (texels weighted by area)
     std::vector<double> silhouette;     ///< colour with k = 0: mean silhouette for K = 2..k_max
     int distinct_colours = 0;           ///< colour: distinct 8-bit colours in the albedo
     double seconds = 0;                 ///< wall time of segment_parts
