@@ -1,9 +1,10 @@
 #pragma once
 /// The composed tactile target of a multi-part scene, in texture space: every atlas texel takes
 /// the tactile normal of its part's map laid with that part's layout; across a part boundary the
-/// two maps are cross-faded over the texels touching it only, so no material reaches more than
-/// `band` texels into the other and the boundary has no step larger than the maps' own
-/// neighbour-to-neighbour variation allows. Also the per-part masks and the label map exports.
+/// two maps are cross-faded over the texels touching it only (no material reaches more than
+/// sqrt 2 texels into the other with the default band), spreading the jump between the two
+/// textures over those texels and keeping the relief's strength there (measure_part_boundary).
+/// Also the per-part masks and the label map exports.
 #include <tdf/core/config.h>
 #include <tdf/core/image.h>
 #include <tdf/render/texture.h>
