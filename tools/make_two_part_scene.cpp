@@ -6,7 +6,6 @@
 //
 //   tdf_make_two_part_scene <folder>            write the files below
 //   tdf_make_two_part_scene --check <folder>    exit 1 if the folder's files differ
-#include <fmt/format.h>
 #include <tdf/atlas/gutter.h>
 #include <tdf/atlas/uv_raster.h>
 #include <tdf/core/atomic_file.h>
@@ -14,8 +13,10 @@
 #include <tdf/core/rng.h>
 #include <tdf/io/image_io.h>
 #include <tdf/scene/procedural_mesh.h>
-#include <unistd.h>
 
+#include <fmt/format.h>
+
+#include <unistd.h>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>

@@ -1,10 +1,11 @@
 // Colour clustering for the `colour` parts source. Lloyd's k-means on a deterministic subsample
 // (the update is serial and cheap; the assignment of every sample is parallel and independent,
 // so results do not depend on the thread count).
+#include <tdf/parts/colour_segmentation.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
-#include <tdf/parts/colour_segmentation.h>
 
 #include <algorithm>
 #include <atomic>

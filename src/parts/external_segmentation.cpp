@@ -1,18 +1,19 @@
 // The `external` parts source (protocol in docs/parts-protocol.md). One call for all views: the
 // program may batch them (a segmenter loads its weights once).
+#include <tdf/parts/external_segmentation.h>
+
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/guidance/subprocess.h>
 #include <tdf/io/image_io.h>
 #include <tdf/parts/colour_segmentation.h>
-#include <tdf/parts/external_segmentation.h>
 #include <tdf/parts/part_segmentation.h>
 #include <tdf/render/trace.h>
 #include <tdf/scene/camera.h>
 #include <tdf/scene/embree_scene.h>
-#include <unistd.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>

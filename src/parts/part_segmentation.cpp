@@ -1,6 +1,8 @@
 // Part segmentation: each source produces named regions per face or per atlas texel; regions
 // are matched to parts by the parts' `select`; the other representation is derived (texels
 // from faces through the atlas raster, faces from texels by majority).
+#include <tdf/parts/part_segmentation.h>
+
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
@@ -8,7 +10,6 @@
 #include <tdf/io/image_io.h>
 #include <tdf/parts/colour_segmentation.h>
 #include <tdf/parts/external_segmentation.h>
-#include <tdf/parts/part_segmentation.h>
 
 #include <algorithm>
 #include <cctype>

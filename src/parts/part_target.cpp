@@ -1,9 +1,10 @@
 // Composition of the per-part tactile targets over the atlas, and the label map exports.
+#include <tdf/parts/part_target.h>
+
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/io/image_io.h>
-#include <tdf/parts/part_target.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,20 +1,22 @@
 // Part segmentation: every parts source against known ground truth on a procedural sphere, the
 // shipped two-part scene (label accuracy >= 98 %), and one clear line per bad input.
-#include <gtest/gtest.h>
 #include <tdf/atlas/gutter.h>
 #include <tdf/atlas/uv_raster.h>
 #include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
 #include <tdf/io/image_io.h>
 #include <tdf/parts/colour_segmentation.h>
 #include <tdf/parts/part_segmentation.h>
 #include <tdf/render/scene_assets.h>
 #include <tdf/scene/procedural_mesh.h>
 
+#include "common/test_paths.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
-#include "common/test_paths.h"
 
 using namespace tdf;
 
@@ -376,4 +378,22 @@ TEST(PartSegmentation, SpotPatchesFromColourOnTheRealMesh) {
     EXPECT_GE(accuracy, 0.98);
     EXPECT_GT(seg.part_fraction[1], 0.05);
     EXPECT_LT(seg.part_fraction[1], 0.2);
+}
+
+TEST(PartSegmentation, SameColourSegmentationOnOneAndTwoThreads) {
+    PaintedSphere s;
+    const PartsSpec spec = two_parts("colour");
+    PartSegmentation one, two;
+    {
+        ThreadLimit limit(1);
+        one = segment_parts(spec, s.input(256));
+    }
+    {
+        ThreadLimit limit(2);
+        two = segment_parts(spec, s.input(256));
+    }
+    EXPECT_EQ(one.texel_part, two.texel_part);
+    EXPECT_EQ(one.face_part, two.face_part);
+    ASSERT_EQ(one.regions.size(), two.regions.size());
+    EXPECT_EQ(one.regions[0].rgb.x, two.regions[0].rgb.x);
 }

@@ -1,15 +1,16 @@
 // The composed multi-part tactile target: bleeding and seams at part boundaries (measured),
 // mip levels that do not mix parts, and the label map / mask exports.
-#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/core/rng.h>
 #include <tdf/io/image_io.h>
 #include <tdf/parts/part_target.h>
 
+#include "common/test_paths.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <fstream>
-
-#include "common/test_paths.h"
 
 using namespace tdf;
 

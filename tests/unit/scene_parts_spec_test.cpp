@@ -1,11 +1,12 @@
 // The scene file's `parts` section: parsing, defaults, and one clear line per bad input.
-#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/scene/scene_file.h>
 
-#include <filesystem>
-
 #include "common/test_paths.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
 
 using namespace tdf;
 
