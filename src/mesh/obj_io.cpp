@@ -1,10 +1,11 @@
 // Wavefront OBJ/MTL reading. Hand-written rather than tinyobjloader because the reference's
 // semantics matter (separate position/UV index buffers, the last map_Kd wins, xyzrgb vertices,
 // its MTL search order, spec 1.2) and every error must name the file and line.
+#include <tdf/mesh/mesh_io.h>
+
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
-#include <tdf/mesh/mesh_io.h>
 
 #include <algorithm>
 #include <cerrno>
