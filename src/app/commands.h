@@ -27,5 +27,6 @@ Command register_tactile(CLI::App& root);
 Command register_atlas(CLI::App& root);
 Command register_optimize(CLI::App& root);
 Command register_batch(CLI::App& root);
+Command register_parts(CLI::App& root);
 
 }  // namespace tdf::app

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
     std::vector<app::Command> commands = {
         app::register_render(root),  app::register_compare(root), app::register_tactile(root),
         app::register_atlas(root),   app::register_optimize(root), app::register_batch(root),
+        app::register_parts(root),
     };
     for (auto& c : commands) c.app->fallthrough();  // global flags may follow the subcommand
 

@@ -221,8 +221,11 @@ struct Builder {
     }
 };
 
+// `group` says where the primitive came from; it is recorded as a FaceGroup when the primitive
+// adds faces.
 void add_primitive(Builder& b, const GltfReader& reader, const tinygltf::Model& model,
-                   const tinygltf::Primitive& prim, const Mat4d& m, const std::string& path) {
+                   const tinygltf::Primitive& prim, const Mat4d& m, const std::string& path,
+                   FaceGroup group) {
     if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != -1) {
         log_warning("{}: skipping a primitive with mode {} (only triangles are read)", path, prim.mode);
         return;
@@ -267,12 +270,21 @@ void add_primitive(Builder& b, const GltfReader& reader, const tinygltf::Model& 
     }
     if (corners.size() % 3 != 0) throw_error("{}: a triangle primitive has {} indices, not a multiple of 3", path, corners.size());
     const bool mirrored = determinant3(m) < 0;  // keep counter-clockwise = front
+    if (!corners.empty()) {
+        if (prim.material >= 0 && std::size_t(prim.material) < model.materials.size()) {
+            group.gltf_material = prim.material;
+            group.material = model.materials[std::size_t(prim.material)].name;
+        }
+        group.world_from_node = m;
+        b.mesh.face_groups.push_back(std::move(group));
+    }
     for (std::size_t t = 0; t < corners.size(); t += 3) {
         std::uint32_t c[3] = {corners[t], corners[t + 1], corners[t + 2]};
         for (std::uint32_t k : c)
             if (k >= n) throw_error("{}: vertex index {} is out of range ({} vertices)", path, k, n);
         if (mirrored) std::swap(c[1], c[2]);
         b.mesh.triangles.push_back({index[c[0]], index[c[1]], index[c[2]]});
+        b.mesh.face_group.push_back(int(b.mesh.face_groups.size()) - 1);
         b.mesh.uv_triangles.push_back({uv_base + int(c[0]), uv_base + int(c[1]), uv_base + int(c[2])});
     }
     if (prim.material >= 0 && std::size_t(prim.material) < model.materials.size()) {
@@ -300,7 +312,16 @@ void visit(Builder& b, const GltfReader& reader, const tinygltf::Model& model, i
     const Mat4d m = multiply(parent, node_matrix(node));
     if (node.mesh >= 0) {
         if (std::size_t(node.mesh) >= model.meshes.size()) throw_error("{}: mesh {} does not exist", path, node.mesh);
-        for (const auto& prim : model.meshes[std::size_t(node.mesh)].primitives) add_primitive(b, reader, model, prim, m, path);
+        const tinygltf::Mesh& mesh = model.meshes[std::size_t(node.mesh)];
+        for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
+            FaceGroup group;
+            group.object = node.name;
+            group.group = mesh.name;
+            group.gltf_node = node_index;
+            group.gltf_mesh = node.mesh;
+            group.gltf_primitive = int(p);
+            add_primitive(b, reader, model, mesh.primitives[p], m, path, std::move(group));
+        }
     }
     for (int child : node.children) visit(b, reader, model, child, m, path, depth + 1);
 }

@@ -7,6 +7,7 @@
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -138,6 +139,13 @@ TriangleMesh load_obj(const std::string& path, const MeshLoadOptions& options) {
     std::string mtllib;
     bool any_color = false, any_plain = false;
     std::vector<std::pair<int, int>> corners;  // (position, uv) of the current face
+    // The current `o` / `g` / `usemtl` state. When a face follows a change, the group with the
+    // same three names is looked up (files often come back to a material) or appended, so groups
+    // are unique and those without faces are never recorded.
+    FaceGroup current;
+    bool group_changed = true;
+    bool any_group_statement = false;
+    int current_group = 0;
     std::string line;
     std::size_t line_number = 0;
     while (std::getline(in, line)) {
@@ -188,16 +196,41 @@ TriangleMesh load_obj(const std::string& path, const MeshLoadOptions& options) {
                 if ((c.second >= 0) != has_uv) parser.fail("face mixes corners with and without texture coordinates");
             if (!mesh.triangles.empty() && has_uv != !mesh.uv_triangles.empty())
                 parser.fail("some faces have texture coordinates and others do not");
+            if (group_changed) {
+                const auto same =
+                    std::find_if(mesh.face_groups.begin(), mesh.face_groups.end(), [&](const FaceGroup& g) {
+                        return g.object == current.object && g.group == current.group &&
+                               g.material == current.material;
+                    });
+                current_group = int(same - mesh.face_groups.begin());
+                if (same == mesh.face_groups.end()) mesh.face_groups.push_back(current);
+                group_changed = false;
+            }
             for (std::size_t k = 1; k + 1 < corners.size(); ++k) {
+                mesh.face_group.push_back(current_group);
                 mesh.triangles.push_back({corners[0].first, corners[k].first, corners[k + 1].first});
                 if (has_uv) mesh.uv_triangles.push_back({corners[0].second, corners[k].second, corners[k + 1].second});
             }
         } else if (keyword == "mtllib") {
             mtllib = std::string(parser.rest_trimmed());
+        } else if (keyword == "o" || keyword == "g" || keyword == "usemtl") {
+            // "g a b" names several groups at once; the whole rest of the line is the key.
+            const std::string name(parser.rest_trimmed());
+            std::string& field = keyword == "o"   ? current.object
+                                 : keyword == "g" ? current.group
+                                                  : current.material;
+            if (field != name) group_changed = true;
+            field = name;
+            any_group_statement = true;
         }
-        // vn (normals are recomputed, spec 1.2), usemtl, o, g, s, l, p: ignored.
+        // vn (normals are recomputed, spec 1.2), s, l, p: ignored.
     }
     if (in.bad()) throw_error("cannot read '{}': I/O error", path);
+    // A file without o/g/usemtl has no structure: both vectors stay empty (one implicit group).
+    if (!any_group_statement) {
+        mesh.face_groups.clear();
+        mesh.face_group.clear();
+    }
     if (any_color && any_plain) mesh.colors.resize(mesh.positions.size(), Vec3f{1, 1, 1});
     if (!mesh.has_uvs()) mesh.uvs.clear();
     if (options.load_textures) {

@@ -139,6 +139,21 @@ std::size_t validate_mesh(const TriangleMesh& mesh, const std::string& source) {
         throw_error("{}: {} vertex colours for {} vertices", source, mesh.colors.size(), mesh.positions.size());
     if (!mesh.uv_triangles.empty() && mesh.uv_triangles.size() != mesh.triangles.size())
         throw_error("{}: {} UV faces for {} faces", source, mesh.uv_triangles.size(), mesh.triangles.size());
+    if (!mesh.face_group.empty() && mesh.face_group.size() != mesh.triangles.size())
+        throw_error(
+            "{}: {} face group entries for {} faces", source, mesh.face_group.size(), mesh.triangles.size());
+    if (mesh.face_group.empty() != mesh.face_groups.empty())
+        throw_error("{}: face groups are half set ({} groups, {} face entries)",
+                    source,
+                    mesh.face_groups.size(),
+                    mesh.face_group.size());
+    for (std::size_t f = 0; f < mesh.face_group.size(); ++f)
+        if (mesh.face_group[f] < 0 || std::size_t(mesh.face_group[f]) >= mesh.face_groups.size())
+            throw_error("{}: face {} is in group {} but the mesh has {} groups",
+                        source,
+                        f + 1,
+                        mesh.face_group[f],
+                        mesh.face_groups.size());
     const auto n = int(mesh.positions.size());
     const auto nt = int(mesh.uvs.size());
     std::size_t degenerate = 0;

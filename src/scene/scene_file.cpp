@@ -135,6 +135,122 @@ void parse_light(ConfigReader light, const std::string& shading, LightSpec& spec
     light.check_all_read();
 }
 
+std::string select_value(const Json& item, const std::string& where) {
+    if (item.is_string()) return item.get<std::string>();
+    if (item.is_number_integer()) return std::to_string(item.get<long long>());
+    throw_error("{}: 'select' must contain strings or integers, got {}", where, item.dump());
+}
+
+void parse_parts(ConfigReader parts, const fs::path& base, PartsSpec& spec) {
+    ConfigReader source = parts.child("source");
+    PartsSourceSpec& src = spec.source;
+    src.kind = one_of(source, "kind", src.kind, {"mesh", "label_image", "face_labels", "colour", "external"});
+    src.key = one_of(source, "key", src.key, {"material", "object", "group", "primitive"});
+    src.image = resolve_path(base, source.get<std::string>("image", ""));
+    src.file = resolve_path(base, source.get<std::string>("file", ""));
+    src.k = source.get<int>("k", src.k);
+    src.k_max = source.get<int>("k_max", src.k_max);
+    src.smoothing = source.get<int>("smoothing", src.smoothing);
+    if (source.has("external"))
+        src.external = source.raw("external");
+    else
+        source.get<int>("external", 0);
+    source.check_all_read();
+    const std::string where = source.where();
+    if (src.kind == "label_image" && src.image.empty())
+        throw_error("{}: kind is 'label_image' but 'image' is not set", where);
+    if (src.kind == "face_labels" && src.file.empty())
+        throw_error("{}: kind is 'face_labels' but 'file' is not set", where);
+    if (src.k == 1 || src.k < 0 || src.k > 16)
+        throw_error("{}: 'k' must be 0 (choose) or in [2, 16], got {}", where, src.k);
+    if (src.k_max < 2 || src.k_max > 16)
+        throw_error("{}: 'k_max' must be in [2, 16], got {}", where, src.k_max);
+    if (src.smoothing < 0 || src.smoothing > 50)
+        throw_error("{}: 'smoothing' must be in [0, 50], got {}", where, src.smoothing);
+    if (src.kind == "external" && (!src.external.is_object() || !src.external.contains("command")))
+        throw_error("{}: kind is 'external' but 'external.command' is not set", where);
+
+    if (!parts.has("list")) throw_error("{}: 'list' is missing (at least 2 parts)", parts.where());
+    const Json& list = parts.raw("list");
+    if (!list.is_array()) throw_error("{}: 'list' must be a list of parts", parts.where());
+    if (list.size() < 2)
+        throw_error("{}: 'list' has {} part(s); at least 2 are needed", parts.where(), list.size());
+    if (list.size() > 64)
+        throw_error("{}: 'list' has {} parts; at most 64 are supported", parts.where(), list.size());
+    int without_select = 0;
+    for (std::size_t k = 0; k < list.size(); ++k) {
+        ConfigReader item(list[k], fmt::format("{}.list[{}]", parts.where(), k));
+        PartSpec p;
+        p.name = item.require<std::string>("name");
+        if (p.name.empty() ||
+            p.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
+                std::string::npos)
+            throw_error("{}: 'name' is '{}'; use letters, digits, '_' and '-'", item.where(), p.name);
+        for (const PartSpec& other : spec.parts)
+            if (other.name == p.name)
+                throw_error("{}: 'name' '{}' is used by two parts", item.where(), p.name);
+        ConfigReader tactile = item.child("tactile");
+        for (const auto& image : string_list(tactile, "images", {}))
+            p.tactile_images.push_back(resolve_path(base, image));
+        tactile.check_all_read();
+        if (p.tactile_images.empty())
+            throw_error("{}: 'tactile.images' is empty (each part needs a tactile map)", item.where());
+        ConfigReader layout = item.child("layout");
+        p.layout.mode = one_of(layout, "mode", p.layout.mode, {"atlas", "physical"});
+        p.layout.repeat = positive(layout, "repeat", 1.f);
+        p.layout.mm_per_unit = finite(layout, "mm_per_unit", 0.f);
+        p.layout.mm_per_pixel = finite(layout, "mm_per_pixel", 0.f);
+        layout.check_all_read();
+        if (p.layout.mode == "physical" && !(p.layout.mm_per_unit > 0))
+            throw_error("{}: layout.mode is 'physical' but 'layout.mm_per_unit' is not a positive number",
+                        item.where());
+        p.prompt = item.get<std::string>("prompt", "");
+        if (item.has("guidance")) {
+            p.guidance = item.raw("guidance");
+            if (!p.guidance.is_object()) throw_error("{}: 'guidance' must be an object", item.where());
+        } else {
+            item.get<int>("guidance", 0);
+        }
+        if (item.has("select")) {
+            const Json& sel = item.raw("select");
+            if (sel.is_array()) {
+                for (const Json& s : sel) p.select.push_back(select_value(s, item.where()));
+            } else {
+                p.select.push_back(select_value(sel, item.where()));
+            }
+            if (p.select.empty()) throw_error("{}: 'select' is an empty list", item.where());
+        } else {
+            item.get<int>("select", 0);
+            ++without_select;
+        }
+        item.check_all_read();
+        spec.parts.push_back(std::move(p));
+    }
+    if (without_select > 1 && without_select < int(spec.parts.size()))
+        throw_error(
+            "{}: {} parts have no 'select'; at most one part may take the regions no other part selects",
+            parts.where(),
+            without_select);
+    for (std::size_t a = 0; a < spec.parts.size(); ++a)
+        for (std::size_t b = a + 1; b < spec.parts.size(); ++b)
+            for (const std::string& s : spec.parts[a].select)
+                if (std::find(spec.parts[b].select.begin(), spec.parts[b].select.end(), s) !=
+                    spec.parts[b].select.end())
+                    throw_error("{}: '{}' is selected by both '{}' and '{}'",
+                                parts.where(),
+                                s,
+                                spec.parts[a].name,
+                                spec.parts[b].name);
+    if (src.k >= 2 && without_select == int(spec.parts.size()) && src.k != int(spec.parts.size()))
+        throw_error(
+            "{}: 'k' is {} but there are {} parts and none has a 'select' (set k to {} or select clusters)",
+            source.where(),
+            src.k,
+            spec.parts.size(),
+            spec.parts.size());
+    parts.check_all_read();
+}
+
 }  // namespace
 
 SceneDescription parse_scene(const Json& json, const std::string& path) {
@@ -181,6 +297,13 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     s.seed = std::uint64_t(seed);
     parse_views(root.child("views"), s.views);
     parse_light(root.child("light"), s.shading, s.light);
+    if (root.has("parts")) {
+        if (!root.raw("parts").is_object())
+            throw_error("{}: 'parts' must be an object with 'source' and 'list'", path);
+        parse_parts(root.child("parts"), base, s.parts);
+    } else {
+        root.get<int>("parts", 0);
+    }
     for (const auto& name : foreign_scene_sections())
         if (root.has(name)) s.sections[name] = root.raw(name);
     root.check_all_read();
@@ -242,6 +365,35 @@ Json SceneDescription::to_json() const {
           {"position", vec(light.position)},
           {"ambient", light.ambient}}},
     };
+    if (parts.enabled()) {
+        Json list = Json::array();
+        for (const PartSpec& p : parts.parts) {
+            std::vector<std::string> images;
+            for (const auto& t : p.tactile_images) images.push_back(absolute(t));
+            Json item = {{"name", p.name},
+                         {"tactile", {{"images", images}}},
+                         {"layout",
+                          {{"mode", p.layout.mode},
+                           {"repeat", p.layout.repeat},
+                           {"mm_per_unit", p.layout.mm_per_unit},
+                           {"mm_per_pixel", p.layout.mm_per_pixel}}},
+                         {"prompt", p.prompt},
+                         {"guidance", p.guidance}};
+            if (!p.select.empty()) item["select"] = p.select;  // absent = takes the rest
+            list.push_back(item);
+        }
+        const PartsSourceSpec& src = parts.source;
+        j["parts"] = {{"source",
+                       {{"kind", src.kind},
+                        {"key", src.key},
+                        {"image", absolute(src.image)},
+                        {"file", absolute(src.file)},
+                        {"k", src.k},
+                        {"k_max", src.k_max},
+                        {"smoothing", src.smoothing},
+                        {"external", src.external}}},
+                      {"list", list}};
+    }
     for (const auto& [name, section] : sections) j[name] = section;
     return j;
 }

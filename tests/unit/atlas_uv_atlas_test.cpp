@@ -287,3 +287,14 @@ TEST(UvAtlas, SharedMeshesReunwrapWithoutOverlapsAndBeatXatlasUtilisation) {
     }
     EXPECT_GE(tested, 2u);
 }
+
+TEST(UvAtlas, KeepsFaceGroupsWithTheirFaces) {
+    TriangleMesh mesh = cube();
+    mesh.face_groups = {FaceGroup{"box", "", "a"}, FaceGroup{"box", "", "b"}};
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) mesh.face_group.push_back(int(f % 2));
+    const TriangleMesh out = build_atlas(mesh, unwrap());
+    EXPECT_EQ(out.face_group, mesh.face_group);
+    ASSERT_EQ(out.face_groups.size(), 2u);
+    EXPECT_EQ(out.face_groups[1].material, "b");
+    EXPECT_EQ(validate_mesh(out, "atlas"), 0u);
+}

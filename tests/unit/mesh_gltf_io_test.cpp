@@ -159,4 +159,46 @@ TEST(GltfIo, LoadsTheAvocadoWithItsBaseColourTexture) {
     EXPECT_LT(b.extent().x, b.extent().y);
     // Welding: fewer positions than UV vertices (glTF splits vertices at UV seams).
     EXPECT_LT(mesh.positions.size(), mesh.uvs.size());
+    // One node, mesh and primitive with material "2256_Avocado_d": one group for every face.
+    ASSERT_EQ(mesh.face_groups.size(), 1u);
+    EXPECT_EQ(mesh.face_groups[0].material, "2256_Avocado_d");
+    EXPECT_EQ(mesh.face_groups[0].group, "Avocado");
+    EXPECT_EQ(mesh.face_group, std::vector<int>(682, 0));
+}
+
+TEST(GltfIo, RecordsNodeMeshPrimitiveAndMaterialPerFace) {
+    // Two primitives (materials "skin", "sole") of a mesh "shoe" under the translated/scaled node.
+    const QuadBuffer buffer = quad_buffer();
+    nlohmann::json j = quad_json("groups.bin", buffer.bytes.size());
+    nlohmann::json prim = j["meshes"][0]["primitives"][0];
+    prim["material"] = 0;
+    nlohmann::json second = prim;
+    second["material"] = 1;
+    j["meshes"][0]["primitives"] = nlohmann::json::array({prim, second});
+    j["meshes"][0]["name"] = "shoe";
+    j["nodes"][1]["name"] = "left";
+    j["materials"] = nlohmann::json::array({{{"name", "skin"}}, {{"name", "sole"}}});
+    const std::string dir = test::scratch_dir();
+    std::ofstream(dir + "/groups.bin", std::ios::binary)
+        .write(reinterpret_cast<const char*>(buffer.bytes.data()), std::streamsize(buffer.bytes.size()));
+    std::ofstream(dir + "/groups.gltf") << j.dump();
+    const TriangleMesh mesh = load_mesh(dir + "/groups.gltf");
+    ASSERT_EQ(mesh.triangles.size(), 4u);
+    ASSERT_EQ(mesh.face_groups.size(), 2u);
+    EXPECT_EQ(mesh.face_group, (std::vector<int>{0, 0, 1, 1}));
+    for (int g = 0; g < 2; ++g) {
+        const FaceGroup& group = mesh.face_groups[std::size_t(g)];
+        EXPECT_EQ(group.object, "left");
+        EXPECT_EQ(group.group, "shoe");
+        EXPECT_EQ(group.material, g == 0 ? "skin" : "sole");
+        EXPECT_EQ(group.gltf_node, 1);
+        EXPECT_EQ(group.gltf_mesh, 0);
+        EXPECT_EQ(group.gltf_primitive, g);
+        EXPECT_EQ(group.gltf_material, g);
+        // World matrix, column-major: scale 2 then translate z by 5.
+        EXPECT_DOUBLE_EQ(group.world_from_node[0], 2.0);
+        EXPECT_DOUBLE_EQ(group.world_from_node[10], 2.0);
+        EXPECT_DOUBLE_EQ(group.world_from_node[14], 5.0);
+        EXPECT_DOUBLE_EQ(group.world_from_node[15], 1.0);
+    }
 }

@@ -81,3 +81,36 @@ TEST(ObjIo, LoadsRealMeshesWithTextures) {
     EXPECT_EQ(mug.triangles.size(), 24544u);
     EXPECT_TRUE(mug.albedo.empty());
 }
+
+TEST(ObjIo, RecordsObjectsGroupsAndMaterialsPerFace) {
+    const std::string path = write_file("groups.obj",
+                                        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                        "o cactus\ng top\nusemtl green\nf 1 2 3\n"
+                                        "usemtl brown\nusemtl red\nf 1 3 4\n"
+                                        "o pot\ng\nusemtl clay\nf 1 2 3 4\n"
+                                        "o cactus\ng top\nusemtl green\nf 2 3 4\n");
+    const TriangleMesh mesh = load_obj(path);
+    ASSERT_EQ(mesh.triangles.size(), 5u);
+    ASSERT_EQ(mesh.face_groups.size(), 3u);  // "brown" has no faces; the last run reuses group 0
+    EXPECT_EQ(mesh.face_group, (std::vector<int>{0, 1, 2, 2, 0}));
+    EXPECT_EQ(mesh.face_groups[0].object, "cactus");
+    EXPECT_EQ(mesh.face_groups[0].group, "top");
+    EXPECT_EQ(mesh.face_groups[0].material, "green");
+    EXPECT_EQ(mesh.face_groups[1].material, "red");
+    EXPECT_EQ(mesh.face_groups[2].object, "pot");
+    EXPECT_EQ(mesh.face_groups[2].group, "");
+    EXPECT_EQ(mesh.face_groups[2].material, "clay");
+    EXPECT_EQ(mesh.face_groups[2].gltf_node, -1);
+    // No o/g/usemtl: no structure.
+    EXPECT_TRUE(
+        load_obj(write_file("plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).face_groups.empty());
+}
+
+TEST(ObjIo, ValidateRejectsInconsistentFaceGroups) {
+    TriangleMesh mesh = load_obj(write_file("one.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\ng a\nf 1 2 3\n"));
+    EXPECT_EQ(validate_mesh(mesh, "m"), 0u);
+    mesh.face_group = {1};
+    EXPECT_THROW(validate_mesh(mesh, "m"), Error);
+    mesh.face_group = {0, 0};
+    EXPECT_THROW(validate_mesh(mesh, "m"), Error);
+}

@@ -18,12 +18,17 @@ TriangleMesh load_mesh(const std::string& path, const MeshLoadOptions& options =
 /// Wavefront OBJ: `v x y z [r g b]`, `vt`, `f` with v, v/vt, v/vt/vn, v//vn corners,
 /// polygons (fan from the first corner), negative (relative) indices, `mtllib` with
 /// `map_Kd` (the last one wins). A missing .mtl or texture is a warning, not an error.
+/// `o`, `g` and `usemtl` fill `face_groups` / `face_group` (one group per distinct (o, g, usemtl)
+/// triple that has faces, in order of first use); a file with none of them leaves both empty.
 TriangleMesh load_obj(const std::string& path, const MeshLoadOptions& options = {});
 /// glTF 2.0 (.gltf with .bin, or .glb): POSITION, NORMAL (ignored, recomputed), TEXCOORD_0,
-/// COLOR_0, material baseColorTexture; every triangle primitive of every mesh node.
+/// COLOR_0, material baseColorTexture; every triangle primitive of every mesh node. Each
+/// (node, primitive) with faces becomes one FaceGroup: node name, mesh name, material name, the
+/// indices, and the node's world matrix that was applied to its positions.
 TriangleMesh load_gltf(const std::string& path, const MeshLoadOptions& options = {});
 /// PLY (ASCII and binary): vertex x y z, optional red green blue (uchar or float), optional
-/// s t / u v / texture_u texture_v; face vertex_indices (polygons fanned).
+/// s t / u v / texture_u texture_v; face vertex_indices (polygons fanned). PLY has no groups:
+/// `face_groups` / `face_group` stay empty (one implicit group).
 TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options = {});
 
 /// Finishes a freshly parsed mesh: validates it (warning about degenerate triangles),

@@ -89,7 +89,8 @@ void compute_tangents(TriangleMesh& mesh, TangentMode mode = TangentMode::Handed
 void normalize_mesh(TriangleMesh& mesh, float bound = 0.9f);
 
 /// Checks a loaded mesh and throws tdf::Error naming `source` on: no triangles, indices out
-/// of range, non-finite positions/UVs/colours, every triangle degenerate. Degenerate
+/// of range, non-finite positions/UVs/colours, `face_group` not matching the faces or out of
+/// range of `face_groups`, every triangle degenerate. Degenerate
 /// (zero-area) triangles among good ones are kept (they are never hit and carry no area) and
 /// counted in the returned number so the caller can warn.
 std::size_t validate_mesh(const TriangleMesh& mesh, const std::string& source);

@@ -56,6 +56,50 @@ struct LightSpec {
     float ambient = 0.1f;  ///< default by shading mode: training 0.5 (spec 3.4), visualizer 0.1 (3.9)
 };
 
+/// How one part's tactile map is laid on the atlas (README "Multi-part textures").
+struct PartLayoutSpec {
+    std::string mode = "atlas";  ///< "atlas": covers the atlas `repeat` times; "physical": real size
+    float repeat = 1.f;          ///< atlas mode: uv' = uv * repeat, > 0
+    float mm_per_unit = 0.f;     ///< physical mode: millimetres per mesh unit (required there)
+    float mm_per_pixel = 0.f;    ///< physical mode: overrides the map's tdf:mm_per_pixel when > 0
+};
+
+/// One part of a multi-part scene: its own tactile map(s), layout and guidance settings.
+struct PartSpec {
+    std::string name;                         ///< [A-Za-z0-9_-]+, unique; names the mask files
+    std::vector<std::string> tactile_images;  ///< resolved paths (at least one)
+    PartLayoutSpec layout;
+    std::string prompt;              ///< guidance prompt ("" = the trainer's default)
+    Json guidance = Json::object();  ///< raw per-part guidance settings (the trainer's)
+    /// Which regions of the source belong to this part: material/object/group names (mesh),
+    /// "#rrggbb" colours (label_image), labels (face_labels), cluster indices (colour), mask
+    /// indices (external). Empty: see PartsSpec.
+    std::vector<std::string> select;
+};
+
+/// Where the parts come from (`parts.source`).
+struct PartsSourceSpec {
+    /// mesh | label_image | face_labels | colour | external
+    std::string kind = "mesh";
+    std::string key = "material";    ///< mesh: material | object | group | primitive
+    std::string image;               ///< label_image: resolved path of an image in the mesh's UV space
+    std::string file;                ///< face_labels: resolved path of the per-face label file
+    int k = 0;                       ///< colour: clusters; 0 = choose in [2, k_max]
+    int k_max = 6;                   ///< colour: largest K tried when k = 0, [2, 16]
+    int smoothing = 3;               ///< colour / external: rounds of neighbourhood majority, [0, 50]
+    Json external = Json::object();  ///< external: the program settings (docs/parts-protocol.md)
+};
+
+/// `parts`: N >= 2 parts and their source. Regions are matched to parts by each part's
+/// `select`; one part may leave `select` empty and takes every region no other part selects;
+/// when no part has a `select`, region i (in the source's order) goes to part i and the source
+/// must find exactly N regions.
+struct PartsSpec {
+    PartsSourceSpec source;
+    std::vector<PartSpec> parts;
+    bool enabled() const { return !parts.empty(); }
+};
+
 struct SceneDescription {
     std::string path;         ///< the scene file
     std::string mesh;         ///< resolved mesh path (.obj, .gltf, .glb, .ply)
@@ -78,6 +122,7 @@ struct SceneDescription {
     std::uint64_t seed = 0;
     ViewsSpec views;
     LightSpec light;
+    PartsSpec parts;  ///< empty unless the scene has a "parts" section
     /// Raw JSON of the sections owned by other modules (optimize, tactile_layout, guidance, export).
     std::map<std::string, Json> sections;
 
