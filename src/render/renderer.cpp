@@ -187,8 +187,7 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
                     const Vec3f l = light.kind == Light::Kind::Point ? safe_normalize(light.vector - g.position[i])
                                                                     : light.vector;
                     const float shade = light.ambient + (1.f - light.ambient) * std::max(0.f, dot(n, l));
-                    const Vec3f c = albedo * shade;
-                    put3(o, {std::clamp(c.x, 0.f, 1.f), std::clamp(c.y, 0.f, 1.f), std::clamp(c.z, 0.f, 1.f)});
+                    put3(o, lit_color(albedo, shade, m_settings.color_space));
                 }
             }
     });

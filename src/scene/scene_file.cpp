@@ -148,6 +148,11 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     const std::string tangents = one_of(root, "tangents", "handed", {"handed", "reference"});
     s.tangents = tangents == "handed" ? TangentMode::Handed : TangentMode::Reference;
 
+    s.object_name = root.get<std::string>("object_name", "");
+    ConfigReader uv = root.child("uv");
+    s.uv_reunwrap = uv.get<bool>("reunwrap", false);
+    uv.check_all_read();
+
     ConfigReader albedo = root.child("albedo");
     s.albedo_source = one_of(albedo, "source", "mesh", {"mesh", "image", "vertex_colors", "constant"});
     s.albedo_image = resolve_path(base, albedo.get<std::string>("image", ""));
@@ -171,6 +176,7 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     s.ssaa = finite(root, "ssaa", 1.f);
     if (s.ssaa < 1.f || s.ssaa > 4.f) throw_error("{}: 'ssaa' must be in [1, 4], got {}", path, s.ssaa);
     s.shading = one_of(root, "shading", s.shading, {"training", "visualizer"});
+    s.color_space = one_of(root, "color_space", s.color_space, {"raw", "srgb"});
     s.background = read_vec3(root, "background", s.background);
     s.passes = string_list(root, "passes", s.passes);
     if (s.passes.empty()) throw_error("{}: 'passes' is empty", path);
@@ -212,12 +218,15 @@ Json SceneDescription::to_json() const {
         {"normalize", normalize},
         {"normalize_bound", normalize_bound},
         {"tangents", tangents == TangentMode::Handed ? "handed" : "reference"},
+        {"object_name", object_name},
+        {"uv", {{"reunwrap", uv_reunwrap}}},
         {"albedo", {{"source", albedo_source}, {"image", absolute(albedo_image)}, {"color", vec(albedo_color)}}},
         {"tactile", {{"images", tactile}}},
         {"label_map", absolute(label_map)},
         {"image", {{"width", width}, {"height", height}}},
         {"ssaa", ssaa},
         {"shading", shading},
+        {"color_space", color_space},
         {"background", vec(background)},
         {"passes", passes},
         {"seed", seed},

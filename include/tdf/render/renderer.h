@@ -8,6 +8,7 @@
 #include <tdf/core/vec.h>
 #include <tdf/mesh/triangle_mesh.h>
 #include <tdf/render/frame.h>
+#include <tdf/render/shading.h>
 #include <tdf/render/texture.h>
 #include <tdf/scene/camera.h>
 #include <tdf/scene/embree_scene.h>
@@ -52,6 +53,9 @@ ShadingMode parse_shading_mode(const std::string& name);
 struct RenderSettings {
     ShadingMode shading = ShadingMode::Training;
     Vec3f background{1, 1, 1};  ///< composited behind albedo and lambertian (spec 3.6: white)
+    /// How albedo and shade combine in the lambertian pass (shading.h lit_color); the albedo
+    /// pass shows the stored values in both (what a viewer displays for an unlit texel).
+    ColorSpace color_space = ColorSpace::Raw;
 };
 
 class Renderer {
