@@ -173,9 +173,12 @@ TEST(TangentHandedness, MirroredChartHasTheSameReliefInTdfGltfTangentsAndMikkTSp
 TEST(TangentHandedness, ReferenceTangentsGetTheMirroredSideWrong) {
     // The reference discards handedness (TangentMode::Reference): the plain half is right, the
     // mirrored half draws relief that is not the map's. This is what the handed default fixes.
+    // (Its per-position averaging also cancels the tangents of the two charts along the seam,
+    // so only faces away from x = 0 are compared.)
     const TriangleMesh mesh = load_asset(TangentMode::Reference);
     int plain = 0, mirrored = 0;
     for (const auto& [x, n] : render_normals(mesh)) {
+        if (std::fabs(x) < 0.55f) continue;
         const float error = length(n - expected_normal(x));
         if (x > 0) {
             EXPECT_LT(error, 1e-3f);
@@ -185,6 +188,6 @@ TEST(TangentHandedness, ReferenceTangentsGetTheMirroredSideWrong) {
             ++mirrored;
         }
     }
-    EXPECT_GT(plain, 100);
-    EXPECT_GT(mirrored, 100);
+    EXPECT_GT(plain, 50);
+    EXPECT_GT(mirrored, 50);
 }
