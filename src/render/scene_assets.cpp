@@ -10,6 +10,8 @@
 #include <tdf/mesh/mesh_io.h>
 #include <tdf/render/shading.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <filesystem>
 
@@ -51,12 +53,17 @@ void reunwrap(SceneAssets& assets, const SceneDescription& d) {
 // them (the counts `tdf atlas` reports) instead of training silently on a broken layout.
 void warn_about_uvs(const TriangleMesh& mesh, const SceneDescription& d) {
     const AtlasReport r = measure_atlas(mesh, 1024);
-    if (r.overlaps == 0 && r.unmapped_faces == 0 && r.mirrored_charts == 0) return;
-    log_warning("{}: the mesh's UVs have {} overlapping triangle pairs (they share texels), {} unmapped faces (no UV "
-                "area or outside [0, 1]) and {} mirrored charts ({} flipped triangles; shaded right with handed "
-                "tangents, but the tactile map runs mirrored there); set \"uv\": {{\"reunwrap\": true}} in the scene "
-                "to train on a new atlas",
-                d.mesh, r.overlaps, r.unmapped_faces, r.mirrored_charts, r.flipped_triangles);
+    std::string problems;
+    const auto add = [&problems](std::size_t count, const std::string& what) {
+        if (count > 0) problems += fmt::format("{}{} {}", problems.empty() ? "" : ", ", count, what);
+    };
+    add(r.overlaps, "overlapping triangle pairs (the faces share texels)");
+    add(r.unmapped_faces, "unmapped faces (no UV area, or outside [0, 1])");
+    add(r.mirrored_charts, fmt::format("mirrored charts ({} flipped triangles; shaded right with the handed tangents, "
+                                       "but the tactile map runs mirrored there)", r.flipped_triangles));
+    if (problems.empty()) return;
+    log_warning("{}: the mesh's UVs have {}; set \"uv\": {{\"reunwrap\": true}} in the scene to train on a new atlas",
+                d.mesh, problems);
 }
 
 }  // namespace
