@@ -3,6 +3,7 @@
 // TANGENT (bitangent = cross(N, T) * w) and in one that computes MikkTSpace tangents itself (as
 // viewers do when TANGENT is absent), on both sides of the mirror.
 #include <tdf/core/atomic_file.h>
+#include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_io.h>
 #include <tdf/mesh/mesh_writer.h>
 #include <tdf/render/renderer.h>
@@ -144,9 +145,18 @@ TEST(TangentHandedness, MirroredChartHasTheSameReliefInTdfGltfTangentsAndMikkTSp
     ASSERT_GT(right, 100);
     EXPECT_LT(tdf_error, 1e-3) << "tdf's shading normal differs from the relief the map describes";
 
-    // 2. The exported GLB, read as a viewer reads it.
-    const std::string path = test::scratch_dir() + "/mirrored_chart.glb";
-    write_glb(path, mesh);
+    // 2. The exported GLB, read as a viewer reads it. With the tilted map as normalTexture (and
+    // an OBJ + MTL + PNG beside it), so the same files can be opened in other programs by hand.
+    Image encoded(8, 8, 3);
+    for (std::size_t p = 0; p < encoded.pixel_count(); ++p)
+        for (int c = 0; c < 3; ++c) encoded.data()[3 * p + std::size_t(c)] = (kTilt[c] + 1.f) * 0.5f;
+    const std::string folder = test::scratch_dir();
+    write_png(folder + "/mirrored_chart_normal.png", encoded, 8, Quantize::Truncate);
+    write_obj(folder + "/mirrored_chart.obj", mesh, ObjMaterial{"tilted", "", "mirrored_chart_normal.png"});
+    GlbMaps maps;
+    maps.normal_png = read_text_file(folder + "/mirrored_chart_normal.png");
+    const std::string path = folder + "/mirrored_chart.glb";
+    write_glb(path, mesh, maps);
     const auto triangles = read_glb_triangles(path);
     ASSERT_EQ(triangles.size(), mesh.triangles.size());
     int mirrored = 0;
