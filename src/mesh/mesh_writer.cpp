@@ -388,7 +388,8 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
     }
 
     Json images = Json::array(), textures = Json::array();
-    Json pbr = {{"metallicFactor", 0.0}, {"roughnessFactor", 0.5}};
+    // Dielectric and fully rough: the closest glTF's PBR model comes to tdf's Lambertian shading.
+    Json pbr = {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}};
     Json material = {{"name", "material"}};
     for (const auto& [png, slot] :
          {std::make_pair(&maps.albedo_png, "baseColorTexture"), std::make_pair(&maps.normal_png, "normalTexture")}) {
