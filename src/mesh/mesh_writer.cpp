@@ -6,6 +6,7 @@
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_writer.h>
+#include <unistd.h>
 
 #include <cctype>
 #include <cerrno>
@@ -17,7 +18,6 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <tuple>
-#include <unistd.h>
 
 namespace tdf {
 
@@ -45,10 +45,10 @@ void write_obj_group_lines(fmt::memory_buffer& out, const TriangleMesh& mesh, st
     if (f > 0 && mesh.face_group[f - 1] == g) return;
     if (g < 0 || std::size_t(g) >= mesh.face_groups.size()) return;
     const FaceGroup& group = mesh.face_groups[std::size_t(g)];
-    const FaceGroup* previous = f > 0 && mesh.face_group[f - 1] >= 0 &&
-                                        std::size_t(mesh.face_group[f - 1]) < mesh.face_groups.size()
-                                    ? &mesh.face_groups[std::size_t(mesh.face_group[f - 1])]
-                                    : nullptr;
+    const FaceGroup* previous =
+        f > 0 && mesh.face_group[f - 1] >= 0 && std::size_t(mesh.face_group[f - 1]) < mesh.face_groups.size()
+            ? &mesh.face_groups[std::size_t(mesh.face_group[f - 1])]
+            : nullptr;
     // OBJ names end at whitespace: spaces inside glTF names become underscores.
     const auto name = [](std::string s) {
         for (char& c : s)
@@ -57,7 +57,8 @@ void write_obj_group_lines(fmt::memory_buffer& out, const TriangleMesh& mesh, st
     };
     if (!group.object.empty() && (!previous || previous->object != group.object))
         fmt::format_to(std::back_inserter(out), "o {}\n", name(group.object));
-    if (!group.group.empty() && (!previous || previous->group != group.group || previous->object != group.object))
+    if (!group.group.empty() &&
+        (!previous || previous->group != group.group || previous->object != group.object))
         fmt::format_to(std::back_inserter(out), "g {}\n", name(group.group));
 }
 
@@ -163,7 +164,8 @@ struct Affine {
         return x;
     }
     double determinant() const {
-        return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+        return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+               a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
                a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
     }
     // Returns false for a singular matrix.
@@ -180,7 +182,8 @@ struct Affine {
         out.a[2][0] = (a[1][0] * a[2][1] - a[1][1] * a[2][0]) * s;
         out.a[2][1] = (a[0][1] * a[2][0] - a[0][0] * a[2][1]) * s;
         out.a[2][2] = (a[0][0] * a[1][1] - a[0][1] * a[1][0]) * s;
-        for (int r = 0; r < 3; ++r) out.t[r] = -(out.a[r][0] * t[0] + out.a[r][1] * t[1] + out.a[r][2] * t[2]);
+        for (int r = 0; r < 3; ++r)
+            out.t[r] = -(out.a[r][0] * t[0] + out.a[r][1] * t[1] + out.a[r][2] * t[2]);
         return true;
     }
     Vec3f point(Vec3f p) const {
@@ -230,7 +233,8 @@ std::vector<OutputNode> split_into_nodes(const TriangleMesh& mesh) {
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
         const int gi = mesh.face_group[f];
         static const FaceGroup kNone;
-        const FaceGroup& g = gi >= 0 && std::size_t(gi) < mesh.face_groups.size() ? mesh.face_groups[std::size_t(gi)] : kNone;
+        const FaceGroup& g =
+            gi >= 0 && std::size_t(gi) < mesh.face_groups.size() ? mesh.face_groups[std::size_t(gi)] : kNone;
         const bool gltf = g.gltf_node >= 0;
         const auto node_key = gltf ? std::make_tuple(g.gltf_node, std::string(), std::string())
                                    : std::make_tuple(-1, g.object, g.group);
@@ -261,7 +265,10 @@ std::string encode_png_bytes(const Image& image, Quantize quantize) {
     const fs::path folder = fs::temp_directory_path();
     std::string temporary;
     for (int attempt = 0;; ++attempt) {
-        temporary = (folder / fmt::format("tdf_png_{}_{}_{}.png", ::getpid(), static_cast<const void*>(&image), attempt)).string();
+        temporary =
+            (folder /
+             fmt::format("tdf_png_{}_{}_{}.png", ::getpid(), static_cast<const void*>(&image), attempt))
+                .string();
         if (!fs::exists(temporary)) break;
     }
     write_png(temporary, image, 8, quantize);
@@ -271,8 +278,8 @@ std::string encode_png_bytes(const Image& image, Quantize quantize) {
     return bytes;
 }
 
-void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* albedo, const Image* normal_map,
-               Quantize quantize) {
+void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* albedo,
+               const Image* normal_map, Quantize quantize) {
     GlbMaps maps;
     if (albedo && !albedo->empty()) maps.albedo_png = encode_png_bytes(*albedo, quantize);
     if (normal_map && !normal_map->empty()) maps.normal_png = encode_png_bytes(*normal_map, quantize);
@@ -313,7 +320,9 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
         Affine node_from_world;
         const Affine world_from_node = Affine::from_gltf(node.world_from_node);
         if (!world_from_node.inverse(node_from_world))
-            throw_error("{}: node '{}' has a singular matrix; cannot write its mesh in node coordinates", path, node.name);
+            throw_error("{}: node '{}' has a singular matrix; cannot write its mesh in node coordinates",
+                        path,
+                        node.name);
         // The loader reversed the winding under a mirroring matrix (counter-clockwise = front in
         // world); glTF's viewers reverse it again for such nodes, so the file keeps the input's order.
         const bool mirrored = world_from_node.determinant() < 0;
@@ -341,7 +350,8 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
                     positions.insert(positions.end(), {position.x, position.y, position.z});
                     if (has_normals) {
                         // Normals transform by the inverse transpose: n_node ~ A^T n_world.
-                        const Vec3f n = normalize_or_zero(world_from_node.transposed_direction(mesh.normals[std::size_t(p)]));
+                        const Vec3f n = normalize_or_zero(
+                            world_from_node.transposed_direction(mesh.normals[std::size_t(p)]));
                         normals.insert(normals.end(), {n.x, n.y, n.z});
                     }
                     if (has_tangents) {
@@ -364,8 +374,10 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
             TDF_CHECK_EQ(positions.size(), vertex_ids.size() * 3);
             Json attributes = Json::object();
             const std::size_t index_view = add_view(bin.append(indices), indices.size() * 4, 34963);
-            accessors.push_back(
-                {{"bufferView", index_view}, {"componentType", 5125}, {"count", indices.size()}, {"type", "SCALAR"}});
+            accessors.push_back({{"bufferView", index_view},
+                                 {"componentType", 5125},
+                                 {"count", indices.size()},
+                                 {"type", "SCALAR"}});
             const std::size_t index_accessor = accessors.size() - 1;
             attributes["POSITION"] = add_floats(positions, "VEC3", 3);
             accessors[attributes["POSITION"].get<std::size_t>()]["min"] = {lower.x, lower.y, lower.z};
@@ -391,8 +403,8 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
     // Dielectric and fully rough: the closest glTF's PBR model comes to tdf's Lambertian shading.
     Json pbr = {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}};
     Json material = {{"name", "material"}};
-    for (const auto& [png, slot] :
-         {std::make_pair(&maps.albedo_png, "baseColorTexture"), std::make_pair(&maps.normal_png, "normalTexture")}) {
+    for (const auto& [png, slot] : {std::make_pair(&maps.albedo_png, "baseColorTexture"),
+                                    std::make_pair(&maps.normal_png, "normalTexture")}) {
         if (png->empty()) continue;
         const std::size_t view = add_view(bin.append_bytes(png->data(), png->size()), png->size(), 0);
         images.push_back({{"bufferView", view}, {"mimeType", "image/png"}});

@@ -1,6 +1,5 @@
-#include <tdf/render/shading.h>
-
 #include <tdf/core/error.h>
+#include <tdf/render/shading.h>
 
 #include <cmath>
 

@@ -105,7 +105,8 @@ GlbFile read_glb(const std::string& path) {
     std::uint32_t json_length = 0, bin_length = 0;
     std::memcpy(&json_length, bytes.data() + 12, 4);
     std::memcpy(&bin_length, bytes.data() + 20 + json_length, 4);
-    return {nlohmann::json::parse(bytes.substr(20, json_length)), bytes.substr(20 + json_length + 8, bin_length)};
+    return {nlohmann::json::parse(bytes.substr(20, json_length)),
+            bytes.substr(20 + json_length + 8, bin_length)};
 }
 std::string view_bytes(const GlbFile& glb, std::size_t view_index) {
     const auto& view = glb.json["bufferViews"][view_index];
@@ -125,7 +126,8 @@ TriangleMesh two_node_mesh(bool mirror) {
     for (const Vec3f& p : quad) mesh.positions.push_back(p);
     for (const Vec3f& p : quad) mesh.positions.push_back(matrix(p));
     mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
-    if (mirror) mesh.triangles[2] = {4, 6, 5}, mesh.triangles[3] = {4, 7, 6};  // the loader keeps CCW in world
+    if (mirror)
+        mesh.triangles[2] = {4, 6, 5}, mesh.triangles[3] = {4, 7, 6};  // the loader keeps CCW in world
     mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
     mesh.uv_triangles = {{0, 1, 2}, {0, 2, 3}, {0, 1, 2}, {0, 2, 3}};
     if (mirror) mesh.uv_triangles[2] = {0, 2, 1}, mesh.uv_triangles[3] = {0, 3, 2};
@@ -214,8 +216,9 @@ TEST(MeshWriter, GlbKeepsTheInputNodesAndWritesPositionsInNodeCoordinates) {
         ASSERT_TRUE(glb.json["nodes"][1].contains("matrix"));
         EXPECT_EQ(glb.json["nodes"][1]["matrix"][12].get<double>(), 5.0);
         // The moved node's mesh is the unit quad again in its own coordinates.
-        const auto& position = glb.json["accessors"][glb.json["meshes"][1]["primitives"][0]["attributes"]["POSITION"]
-                                                         .get<std::size_t>()];
+        const auto& position =
+            glb.json["accessors"]
+                    [glb.json["meshes"][1]["primitives"][0]["attributes"]["POSITION"].get<std::size_t>()];
         for (int k = 0; k < 3; ++k) {
             EXPECT_NEAR(position["min"][k].get<double>(), 0.0, 1e-6) << k;
             EXPECT_NEAR(position["max"][k].get<double>(), k < 2 ? 1.0 : 0.0, 1e-6) << k;
@@ -228,8 +231,9 @@ TEST(MeshWriter, GlbKeepsTheInputNodesAndWritesPositionsInNodeCoordinates) {
         for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
             const auto face_normal = [](const TriangleMesh& m, std::size_t face) {
                 const Vec3i t = m.triangles[face];
-                return normalize_or_zero(cross(m.positions[std::size_t(t.y)] - m.positions[std::size_t(t.x)],
-                                               m.positions[std::size_t(t.z)] - m.positions[std::size_t(t.x)]));
+                return normalize_or_zero(
+                    cross(m.positions[std::size_t(t.y)] - m.positions[std::size_t(t.x)],
+                          m.positions[std::size_t(t.z)] - m.positions[std::size_t(t.x)]));
             };
             EXPECT_LT(length(face_normal(loaded, f) - face_normal(mesh, f)), 1e-5f) << "face " << f;
             Vec3f a{0, 0, 0}, b{0, 0, 0};

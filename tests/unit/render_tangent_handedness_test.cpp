@@ -2,6 +2,7 @@
 // draws must have the same sign in tdf's renderer, in a glTF viewer that uses the exported GLB's
 // TANGENT (bitangent = cross(N, T) * w) and in one that computes MikkTSpace tangents itself (as
 // viewers do when TANGENT is absent), on both sides of the mirror.
+#include <gtest/gtest.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_io.h>
@@ -9,8 +10,6 @@
 #include <tdf/render/renderer.h>
 #include <tdf/render/shading.h>
 #include <tdf/render/trace.h>
-
-#include <gtest/gtest.h>
 
 #include <cstdint>
 #include <cstring>
@@ -79,7 +78,8 @@ std::vector<std::array<GltfCorner, 3>> read_glb_triangles(const std::string& pat
         const auto& a = json["accessors"][accessor];
         const auto& view = json["bufferViews"][a["bufferView"].get<std::size_t>()];
         std::array<float, 4> v{};
-        std::memcpy(v.data(), bin + view["byteOffset"].get<std::size_t>() + index * 4 * std::size_t(components),
+        std::memcpy(v.data(),
+                    bin + view["byteOffset"].get<std::size_t>() + index * 4 * std::size_t(components),
                     4 * std::size_t(components));
         return v;
     };
@@ -99,7 +99,8 @@ std::vector<std::array<GltfCorner, 3>> read_glb_triangles(const std::string& pat
                     const auto n = floats(attributes["NORMAL"], vertex, 3);
                     const auto tg = floats(attributes["TANGENT"], vertex, 4);
                     const auto uv = floats(attributes["TEXCOORD_0"], vertex, 2);
-                    corners[k] = {{p[0], p[1], p[2]}, {n[0], n[1], n[2]}, {tg[0], tg[1], tg[2]}, tg[3], {uv[0], uv[1]}};
+                    corners[k] = {
+                        {p[0], p[1], p[2]}, {n[0], n[1], n[2]}, {tg[0], tg[1], tg[2]}, tg[3], {uv[0], uv[1]}};
                 }
                 triangles.push_back(corners);
             }
@@ -167,13 +168,17 @@ TEST(TangentHandedness, MirroredChartHasTheSameReliefInTdfGltfTangentsAndMikkTSp
         const Vec3f tangent = normalize_or_zero(c[0].tangent + c[1].tangent + c[2].tangent);
         EXPECT_EQ(c[0].w, c[1].w);
         EXPECT_EQ(c[0].w, c[2].w);
-        EXPECT_EQ(c[0].w, centre.x < 0 ? -1.f : 1.f) << "TANGENT w on the " << (centre.x < 0 ? "mirrored" : "plain")
-                                                     << " side";
+        EXPECT_EQ(c[0].w, centre.x < 0 ? -1.f : 1.f)
+            << "TANGENT w on the " << (centre.x < 0 ? "mirrored" : "plain") << " side";
         mirrored += c[0].w < 0;
-        tangent_error = std::max(tangent_error, double(length(viewer_normal(normal, tangent, c[0].w) - expected_normal(centre.x))));
+        tangent_error =
+            std::max(tangent_error,
+                     double(length(viewer_normal(normal, tangent, c[0].w) - expected_normal(centre.x))));
         const auto [mikk_tangent, mikk_sign] = mikktspace_face_tangent(c, normal);
         EXPECT_EQ(mikk_sign, c[0].w) << "MikkTSpace's sign disagrees with the exported TANGENT w";
-        mikk_error = std::max(mikk_error, double(length(viewer_normal(normal, mikk_tangent, mikk_sign) - expected_normal(centre.x))));
+        mikk_error = std::max(
+            mikk_error,
+            double(length(viewer_normal(normal, mikk_tangent, mikk_sign) - expected_normal(centre.x))));
     }
     EXPECT_EQ(mirrored, int(triangles.size() / 2));
     EXPECT_LT(tangent_error, 1e-5) << "a glTF viewer using TANGENT draws different relief";

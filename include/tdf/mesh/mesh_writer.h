@@ -39,11 +39,12 @@ struct GlbMaps {
 std::string encode_png_bytes(const Image& image, Quantize quantize);
 
 /// Writes a binary glTF 2.0 file with one material (metallic 0, roughness 1: as close to
-/// Lambertian shading as glTF's PBR model gets): `baseColorTexture` and `normalTexture` when given. Attributes: POSITION, NORMAL, TANGENT (xyz + w handedness, glTF convention:
-/// bitangent = cross(normal, tangent) * w) and TEXCOORD_0 when the mesh has UVs, COLOR_0 when it
-/// has vertex colours and no albedo map is given (glTF would multiply the two; tdf renders the
-/// texture alone). glTF's texture v points down, so TEXCOORD_0 = (u, 1 - v). Vertices are split
-/// per distinct (position, uv, tangent) corner because glTF has a single index buffer.
+/// Lambertian shading as glTF's PBR model gets): `baseColorTexture` and `normalTexture` when given.
+/// Attributes: POSITION, NORMAL, TANGENT (xyz + w handedness, glTF convention: bitangent = cross(normal,
+/// tangent) * w) and TEXCOORD_0 when the mesh has UVs, COLOR_0 when it has vertex colours and no albedo map
+/// is given (glTF would multiply the two; tdf renders the texture alone). glTF's texture v points down, so
+/// TEXCOORD_0 = (u, 1 - v). Vertices are split per distinct (position, uv, tangent) corner because glTF has a
+/// single index buffer.
 ///
 /// Structure: without TriangleMesh::face_groups, one node, one mesh, one primitive. With them,
 /// the input's: for a glTF input one node per input node (its name and world matrix, flat under

@@ -83,7 +83,8 @@ inline Vec3f lit_color(Vec3f albedo, float shade, ColorSpace space) {
         if (space == ColorSpace::Raw)
             c[k] = std::clamp(albedo[k] * shade, 0.f, 1.f);
         else
-            c[k] = linear_to_srgb(std::clamp(srgb_to_linear(std::clamp(albedo[k], 0.f, 1.f)) * shade, 0.f, 1.f));
+            c[k] =
+                linear_to_srgb(std::clamp(srgb_to_linear(std::clamp(albedo[k], 0.f, 1.f)) * shade, 0.f, 1.f));
     }
     return c;
 }
