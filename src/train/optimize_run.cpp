@@ -42,29 +42,40 @@ std::string make_prompt(const std::string& object_name, const std::string& tacti
     }
 }
 
-// Words of a file or node name: split at '_', '-', '.', spaces and lower-to-upper case changes,
-// lower-cased, without digit-only tokens and words that name the file rather than the object.
+// Words of a file or node name: split at '_', '-', '.' and spaces, then at lower-to-upper case
+// changes, lower-cased, without digit-only tokens and words that name the file rather than the
+// object (checked before and after the case split: "RichDreamer", "WaterBottleMesh").
 std::string name_words(const std::string& name) {
     static const std::set<std::string> kGeneric = {
-        "mesh",    "model",   "scene",  "object",      "obj",        "gltf",     "glb",      "ply",
-        "untitled", "export", "final",  "triangulated", "triangles", "textured", "decimated", "simplified",
-        "remeshed", "lowpoly", "highpoly", "base",     "geometry",   "richdreamer", "instantmesh", "node", "root"};
+        "mesh",     "model",  "scene", "object",       "obj",       "gltf",     "glb",       "ply",
+        "untitled", "export", "final", "triangulated", "triangles", "textured", "decimated", "simplified",
+        "remeshed", "lowpoly", "highpoly", "base",     "geometry",  "richdreamer", "instantmesh", "node", "root"};
+    const auto lower = [](std::string t) {
+        for (char& c : t) c = char(std::tolower(static_cast<unsigned char>(c)));
+        return t;
+    };
+    const auto keep = [&](const std::string& t) {
+        return !t.empty() && !kGeneric.count(lower(t)) && t.find_first_not_of("0123456789") != std::string::npos;
+    };
     std::vector<std::string> tokens(1);
-    for (std::size_t i = 0; i < name.size(); ++i) {
-        const char c = name[i];
-        if (c == '_' || c == '-' || c == '.' || std::isspace(static_cast<unsigned char>(c))) {
+    for (const char c : name) {
+        if (c == '_' || c == '-' || c == '.' || std::isspace(static_cast<unsigned char>(c)))
             tokens.emplace_back();
-            continue;
-        }
-        const bool camel = i > 0 && std::isupper(static_cast<unsigned char>(c)) &&
-                           std::islower(static_cast<unsigned char>(name[i - 1]));
-        if (camel && !tokens.back().empty()) tokens.emplace_back();
-        tokens.back().push_back(char(std::tolower(static_cast<unsigned char>(c))));
+        else
+            tokens.back().push_back(c);
     }
     std::string words;
-    for (const std::string& t : tokens) {
-        if (t.empty() || kGeneric.count(t) || t.find_first_not_of("0123456789") == std::string::npos) continue;
-        words += (words.empty() ? "" : " ") + t;
+    for (const std::string& token : tokens) {
+        if (!keep(token)) continue;
+        std::vector<std::string> parts(1);
+        for (std::size_t i = 0; i < token.size(); ++i) {
+            const bool camel = i > 0 && std::isupper(static_cast<unsigned char>(token[i])) &&
+                               std::islower(static_cast<unsigned char>(token[i - 1]));
+            if (camel) parts.emplace_back();
+            parts.back().push_back(token[i]);
+        }
+        for (const std::string& part : parts)
+            if (keep(part)) words += (words.empty() ? "" : " ") + lower(part);
     }
     return words;
 }

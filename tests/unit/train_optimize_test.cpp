@@ -296,6 +296,8 @@ TEST(Optimize, PromptObjectComesFromTheSceneKeyTheMeshFileOrItsNodes) {
     EXPECT_EQ(object_name_for_prompt(d, mesh), "spot");
     d.mesh = "/downloads/WaterBottle.glb";
     EXPECT_EQ(object_name_for_prompt(d, mesh), "water bottle");
+    d.mesh = "/gen/an_owl_RichDreamer/an_owl_RichDreamer_mesh.obj";  // generator names go, as in the reference
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "an owl");
     d.mesh = "/downloads/old_chair/scene.gltf";  // generic name: the one named node
     mesh.face_groups = {FaceGroup{"Teapot_01", "mesh0", ""}, FaceGroup{"Teapot_01", "mesh1", ""}};
     EXPECT_EQ(object_name_for_prompt(d, mesh), "teapot");
