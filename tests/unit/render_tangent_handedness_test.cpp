@@ -28,11 +28,11 @@ const Vec3f kTilt = normalize_or_zero({0.4f, 0.3f, 1.0f});
 // u runs along +x on the right half and along -x on the mirrored left half.
 Vec3f expected_normal(float x) { return normalize_or_zero({x > 0 ? kTilt.x : -kTilt.x, kTilt.y, kTilt.z}); }
 
-TriangleMesh load_asset(TangentMode mode) {
+TriangleMesh load_asset(TangentMode mode, const std::string& name = "mirrored_chart") {
     MeshLoadOptions options;
     options.load_textures = false;
     options.tangent_mode = mode;
-    return load_mesh(test::source_dir() + "/tests/data/mirrored_chart/mirrored_chart.obj", options);
+    return load_mesh(test::source_dir() + "/tests/data/mirrored_chart/" + name + ".obj", options);
 }
 
 // tdf's renderer: the shading normal of every hit pixel, with the hit's world x.
@@ -131,8 +131,13 @@ Vec3f viewer_normal(Vec3f normal, Vec3f tangent, float w) {
 
 }  // namespace
 
-TEST(TangentHandedness, MirroredChartHasTheSameReliefInTdfGltfTangentsAndMikkTSpace) {
-    const TriangleMesh mesh = load_asset(TangentMode::Handed);
+// mirrored_chart: the mirrored half has its own UV region and seam UVs. mirrored_shared_seam: both
+// halves share one UV region and the seam's UVs (the usual symmetric layout).
+class TangentHandedness : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(TangentHandedness, MirroredChartHasTheSameReliefInTdfGltfTangentsAndMikkTSpace) {
+    const std::string name = GetParam();
+    const TriangleMesh mesh = load_asset(TangentMode::Handed, name);
     ASSERT_TRUE(mesh.has_uvs());
 
     // 1. tdf's renderer, both sides of the mirror.
@@ -152,11 +157,11 @@ TEST(TangentHandedness, MirroredChartHasTheSameReliefInTdfGltfTangentsAndMikkTSp
     for (std::size_t p = 0; p < encoded.pixel_count(); ++p)
         for (int c = 0; c < 3; ++c) encoded.data()[3 * p + std::size_t(c)] = (kTilt[c] + 1.f) * 0.5f;
     const std::string folder = test::scratch_dir();
-    write_png(folder + "/mirrored_chart_normal.png", encoded, 8, Quantize::Truncate);
-    write_obj(folder + "/mirrored_chart.obj", mesh, ObjMaterial{"tilted", "", "mirrored_chart_normal.png"});
+    write_png(folder + "/" + name + "_normal.png", encoded, 8, Quantize::Truncate);
+    write_obj(folder + "/" + name + ".obj", mesh, ObjMaterial{"tilted", "", name + "_normal.png"});
     GlbMaps maps;
-    maps.normal_png = read_text_file(folder + "/mirrored_chart_normal.png");
-    const std::string path = folder + "/mirrored_chart.glb";
+    maps.normal_png = read_text_file(folder + "/" + name + "_normal.png");
+    const std::string path = folder + "/" + name + ".glb";
     write_glb(path, mesh, maps);
     const auto triangles = read_glb_triangles(path);
     ASSERT_EQ(triangles.size(), mesh.triangles.size());
@@ -185,7 +190,9 @@ TEST(TangentHandedness, MirroredChartHasTheSameReliefInTdfGltfTangentsAndMikkTSp
     EXPECT_LT(mikk_error, 1e-5) << "a glTF viewer computing MikkTSpace tangents draws different relief";
 }
 
-TEST(TangentHandedness, ReferenceTangentsGetTheMirroredSideWrong) {
+INSTANTIATE_TEST_SUITE_P(Assets, TangentHandedness, ::testing::Values("mirrored_chart", "mirrored_shared_seam"));
+
+TEST(TangentHandednessReference, ReferenceTangentsGetTheMirroredSideWrong) {
     // The reference discards handedness (TangentMode::Reference): the plain half is right, the
     // mirrored half draws relief that is not the map's. This is what the handed default fixes.
     // (Its per-position averaging also cancels the tangents of the two charts along the seam,
