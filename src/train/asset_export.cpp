@@ -15,8 +15,17 @@
 
 namespace tdf {
 
-void write_asset(const std::string& folder, const std::string& stem, const BakedMaps& maps, const TriangleMesh& mesh,
-                 const RunConfig& config) {
+BakedMaps export_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                       const TextureField& field, const TriangleMesh& mesh, const RunConfig& config,
+                       const TriangleMesh* export_mesh) {
+    BakedMaps maps = bake_field(field, mesh, config.texture_size, config.gutter);
+    write_asset(folder, name, postfix, maps, export_mesh ? *export_mesh : mesh, config);
+    return maps;
+}
+
+void write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config) {
+    const std::string stem = name + postfix;
     const std::string base = folder + "/" + stem;
     // Matches reference: 8-bit maps by truncation (spec 1.5 step 6, 13.20); EXRs keep floats.
     // The albedo is stored as it is rendered and trained (the input's own values, sRGB-encoded
@@ -42,14 +51,6 @@ void write_asset(const std::string& folder, const std::string& stem, const Baked
     }
     log_info("exported {}.obj (+ .mtl{}, maps {}x{})", base, config.write_glb ? ", .glb" : "", maps.albedo.width(),
              maps.albedo.height());
-}
-
-BakedMaps export_asset(const std::string& folder, const std::string& name, const std::string& postfix,
-                       const TextureField& field, const TriangleMesh& mesh, const RunConfig& config,
-                       const TriangleMesh* export_mesh) {
-    BakedMaps maps = bake_field(field, mesh, config.texture_size, config.gutter);
-    write_asset(folder, name + postfix, maps, export_mesh ? *export_mesh : mesh, config);
-    return maps;
 }
 
 std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const EmbreeScene& scene,
