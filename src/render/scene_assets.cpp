@@ -10,10 +10,8 @@
 #include <tdf/mesh/mesh_io.h>
 #include <tdf/render/shading.h>
 
-#include <fmt/format.h>
-
-#include <algorithm>
 #include <filesystem>
+#include <algorithm>
 
 namespace tdf {
 
@@ -67,14 +65,6 @@ void warn_about_uvs(const TriangleMesh& mesh, const SceneDescription& d) {
 }
 
 }  // namespace
-
-TriangleMesh SceneAssets::export_mesh() const {
-    TriangleMesh out = mesh;
-    out.albedo = Image();
-    const float inverse = 1.0f / normalization.scale;
-    for (Vec3f& p : out.positions) p = p * inverse + normalization.center;
-    return out;
-}
 
 std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
     auto assets = std::make_unique<SceneAssets>();
@@ -138,8 +128,8 @@ std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
         m.label = &assets->label;
     }
     assets->settings.shading = parse_shading_mode(d.shading);
-    assets->settings.background = d.background;
     assets->settings.color_space = parse_color_space(d.color_space);
+    assets->settings.background = d.background;
     for (const auto& name : d.passes) {
         try {
             assets->passes.push_back(parse_pass(name));
@@ -179,6 +169,14 @@ Light scene_light(const SceneDescription& d, const SceneView& view, std::size_t 
         light.vector = sample_magic3d_light(rng, view.camera.position);
     }
     return light;
+}
+
+TriangleMesh SceneAssets::export_mesh() const {
+    TriangleMesh out = mesh;
+    out.albedo = Image();
+    const float inverse = 1.0f / normalization.scale;
+    for (Vec3f& p : out.positions) p = p * inverse + normalization.center;
+    return out;
 }
 
 }  // namespace tdf

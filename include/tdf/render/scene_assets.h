@@ -40,13 +40,15 @@ struct SceneAssets {
     SceneAssets& operator=(const SceneAssets&) = delete;
 };
 
-/// Loads the mesh and images a scene names. When the scene has tactile images and the mesh has UVs,
-/// they are measured (measure_atlas) and overlaps, unmapped faces and mirrored charts are warned
-/// about with their counts; `"uv": {"reunwrap": true}` (or a mesh without UVs) builds a new atlas
-/// with `tdf atlas`'s defaults and re-bakes the mesh's albedo texture onto it. Albedo source "mesh" uses the
-/// mesh's texture, else its vertex colours, else constant grey 0.5 with a warning (the reference's fallback,
-/// spec 1.2). Throws tdf::Error naming the scene and the file on missing or bad input.
+/// Loads the mesh and images a scene names. When the scene has tactile images and the mesh has
+/// UVs, they are measured (measure_atlas) and overlaps, unmapped faces and mirrored charts are
+/// warned about with their counts; `"uv": {"reunwrap": true}` (or a mesh without UVs) builds a
+/// new atlas with `tdf atlas`'s defaults and re-bakes the mesh's albedo texture onto it. Albedo
+/// source "mesh" uses the mesh's texture, else its vertex colours, else constant grey 0.5 with
+/// a warning (the reference's fallback, spec 1.2). Throws tdf::Error naming the scene and the
+/// file on missing or bad input.
 std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& description);
+
 
 /// The light of view `index` (LightSpec modes). magic3d draws from
 /// Rng::stream(seed, 0x4c49474854 + index) so lights and views have separate streams.
