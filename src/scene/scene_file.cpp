@@ -176,8 +176,8 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     s.ssaa = finite(root, "ssaa", 1.f);
     if (s.ssaa < 1.f || s.ssaa > 4.f) throw_error("{}: 'ssaa' must be in [1, 4], got {}", path, s.ssaa);
     s.shading = one_of(root, "shading", s.shading, {"training", "visualizer"});
-    s.color_space = one_of(root, "color_space", s.color_space, {"raw", "srgb"});
     s.background = read_vec3(root, "background", s.background);
+    s.color_space = one_of(root, "color_space", s.color_space, {"raw", "srgb"});
     s.passes = string_list(root, "passes", s.passes);
     if (s.passes.empty()) throw_error("{}: 'passes' is empty", path);
     const std::int64_t seed = root.get<std::int64_t>("seed", 0);
@@ -226,8 +226,8 @@ Json SceneDescription::to_json() const {
         {"image", {{"width", width}, {"height", height}}},
         {"ssaa", ssaa},
         {"shading", shading},
-        {"color_space", color_space},
         {"background", vec(background)},
+        {"color_space", color_space},
         {"passes", passes},
         {"seed", seed},
         {"views",

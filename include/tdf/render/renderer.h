@@ -52,10 +52,10 @@ ShadingMode parse_shading_mode(const std::string& name);
 
 struct RenderSettings {
     ShadingMode shading = ShadingMode::Training;
-    Vec3f background{1, 1, 1};  ///< composited behind albedo and lambertian (spec 3.6: white)
     /// How albedo and shade combine in the lambertian pass (shading.h lit_color); the albedo
     /// pass shows the stored values in both (what a viewer displays for an unlit texel).
     ColorSpace color_space = ColorSpace::Raw;
+    Vec3f background{1, 1, 1};  ///< composited behind albedo and lambertian (spec 3.6: white)
 };
 
 class Renderer {

@@ -77,8 +77,8 @@ struct SceneDescription {
     int height = 512;
     float ssaa = 1.f;
     std::string shading = "visualizer";  ///< training | visualizer (checked by the renderer)
-    std::string color_space = "raw";     ///< raw (the reference) | srgb (glTF viewers), shading.h ColorSpace
     Vec3f background{1, 1, 1};
+    std::string color_space = "raw";  ///< raw (the reference) | srgb (glTF viewers), shading.h ColorSpace
     std::vector<std::string> passes = {"lambertian", "albedo", "mask"};  ///< checked by the renderer
     std::uint64_t seed = 0;
     ViewsSpec views;
