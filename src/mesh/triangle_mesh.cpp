@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <utility>
 
 namespace tdf {
@@ -58,27 +59,9 @@ void compute_tangents(TriangleMesh& mesh, TangentMode mode) {
         return;
     }
 
-    // Tangent vertices: per position (Reference) or per (position, uv) pair (Handed).
-    std::vector<int> position_of;  // tangent vertex -> position index
-    if (mode == TangentMode::Reference) {
-        mesh.tangent_triangles = mesh.triangles;
-        position_of.resize(mesh.positions.size());
-        for (std::size_t v = 0; v < position_of.size(); ++v) position_of[v] = int(v);
-    } else {
-        std::map<std::pair<int, int>, int> corner_ids;
-        for (std::size_t f = 0; f < face_count; ++f)
-            for (int k = 0; k < 3; ++k) {
-                const auto key = std::make_pair(mesh.triangles[f][k], mesh.uv_triangles[f][k]);
-                auto [it, inserted] = corner_ids.emplace(key, int(position_of.size()));
-                if (inserted) position_of.push_back(key.first);
-                mesh.tangent_triangles[f][k] = it->second;
-            }
-    }
-
-    const std::size_t n = position_of.size();
-    std::vector<Vec3f> tangent_sum(n, Vec3f{0, 0, 0});
-    std::vector<float> handedness_sum(n, 0.0f);
-    std::vector<int> face_counts(n, 0);
+    // Per face: dP/du and the handedness of its UV layout.
+    std::vector<Vec3f> face_tangent(face_count);
+    std::vector<int> face_side(face_count);
     for (std::size_t f = 0; f < face_count; ++f) {
         const Vec3i& t = mesh.triangles[f];
         const Vec3i& ti = mesh.uv_triangles[f];
@@ -90,17 +73,43 @@ void compute_tangents(TriangleMesh& mesh, TangentMode mode) {
         const float du1 = t1.x - t0.x, dv1 = -(t1.y - t0.y);
         const float du2 = t2.x - t0.x, dv2 = -(t2.y - t0.y);
         const float d = clamp_determinant(du1 * dv2 - dv1 * du2);
-        const Vec3f face_tangent = (e1 * dv2 - e2 * dv1) / d;        // dP/du
+        face_tangent[f] = (e1 * dv2 - e2 * dv1) / d;                  // dP/du
         const Vec3f face_bitangent_down = (e2 * du1 - e1 * du2) / d;  // dP/dv'
         // Handedness: +1 when N x T points toward increasing OBJ v (= decreasing v').
-        const float side = dot(cross(cross(e1, e2), face_tangent), -face_bitangent_down);
+        face_side[f] = dot(cross(cross(e1, e2), face_tangent[f]), -face_bitangent_down) >= 0.0f ? 1 : -1;
+    }
+
+    // Tangent vertices: per position (Reference) or, like MikkTSpace, per (position, uv,
+    // handedness) (Handed): charts that meet at a seam keep their own tangent, and so do the two
+    // sides of a mirror line whose corners share their UVs (a symmetric layout), which would
+    // otherwise average opposite tangents away.
+    std::vector<int> position_of;  // tangent vertex -> position index
+    if (mode == TangentMode::Reference) {
+        mesh.tangent_triangles = mesh.triangles;
+        position_of.resize(mesh.positions.size());
+        for (std::size_t v = 0; v < position_of.size(); ++v) position_of[v] = int(v);
+    } else {
+        std::map<std::tuple<int, int, int>, int> corner_ids;
+        for (std::size_t f = 0; f < face_count; ++f)
+            for (int k = 0; k < 3; ++k) {
+                const auto key = std::make_tuple(mesh.triangles[f][k], mesh.uv_triangles[f][k], face_side[f]);
+                auto [it, inserted] = corner_ids.emplace(key, int(position_of.size()));
+                if (inserted) position_of.push_back(std::get<0>(key));
+                mesh.tangent_triangles[f][k] = it->second;
+            }
+    }
+
+    const std::size_t n = position_of.size();
+    std::vector<Vec3f> tangent_sum(n, Vec3f{0, 0, 0});
+    std::vector<float> handedness_sum(n, 0.0f);
+    std::vector<int> face_counts(n, 0);
+    for (std::size_t f = 0; f < face_count; ++f)
         for (int k = 0; k < 3; ++k) {
             const int tv = mesh.tangent_triangles[f][k];
-            tangent_sum[std::size_t(tv)] += face_tangent;
-            handedness_sum[std::size_t(tv)] += side >= 0.0f ? 1.0f : -1.0f;
+            tangent_sum[std::size_t(tv)] += face_tangent[f];
+            handedness_sum[std::size_t(tv)] += float(face_side[f]);
             face_counts[std::size_t(tv)] += 1;
         }
-    }
     mesh.tangents.resize(n);
     for (std::size_t v = 0; v < n; ++v) {
         const Vec3f normal = mesh.normals[std::size_t(position_of[v])];

@@ -114,6 +114,7 @@ public:
           m_light(light),
           m_targets(targets),
           m_background(settings.background),
+          m_color_space(settings.color_space),
           m_training(settings.shading == ShadingMode::Training),
           m_tactile_max_level(m_training ? -1 : 5),  // spec 3.9: max_mip_level = 5
           m_albedo_mipmapped(m_training),            // visualizer: plain bilinear
@@ -188,9 +189,7 @@ public:
                                         ? safe_normalize(m_light.vector - g.position[i])
                                         : m_light.vector;
                     const float shade = m_light.ambient + (1.f - m_light.ambient) * std::max(0.f, dot(n, l));
-                    const Vec3f c = albedo * shade;
-                    put3(o,
-                         {std::clamp(c.x, 0.f, 1.f), std::clamp(c.y, 0.f, 1.f), std::clamp(c.z, 0.f, 1.f)});
+                    put3(o, lit_color(albedo, shade, m_color_space));
                 }
             }
     }
@@ -202,6 +201,7 @@ private:
     const Light& m_light;
     const Targets& m_targets;
     Vec3f m_background;
+    ColorSpace m_color_space;
     bool m_training;
     int m_tactile_max_level;
     bool m_albedo_mipmapped;

@@ -1,5 +1,6 @@
 #include <tdf/render/scene_assets.h>
 
+#include <tdf/atlas/bake.h>
 #include <tdf/atlas/uv_atlas.h>
 #include <tdf/tactile/tactile_map.h>
 
@@ -13,6 +14,7 @@
 #include <cmath>
 
 #include <filesystem>
+#include <algorithm>
 
 namespace tdf {
 
@@ -23,6 +25,48 @@ Image read_checked(const std::string& path, const std::string& scene, const char
     if (!image.all_finite()) throw_error("{}: {} '{}' contains NaN or infinite values", scene, what, path);
     return image;
 }
+
+// Vertex-coloured meshes from image-to-3D tools have no UVs (spec 13.9), and other meshes' UVs
+// may overlap or leave faces unmapped: give them `tdf atlas`'s default atlas so the tactile map
+// (and the trained maps) have somewhere to go. A texture follows the surface onto the new atlas.
+void reunwrap(SceneAssets& assets, const SceneDescription& d) {
+    const bool had_uvs = assets.mesh.has_uvs();
+    if (had_uvs)
+        log_info("{}: replacing the mesh's UVs by a new atlas (uv.reunwrap)", d.mesh);
+    else
+        log_info("{}: the mesh has no UVs; unwrapping it with `tdf atlas`'s defaults (run `tdf atlas` to choose "
+                 "the settings)", d.mesh);
+    AtlasOptions options;
+    options.reunwrap = true;
+    AtlasReport report;
+    TriangleMesh atlas = build_atlas(assets.mesh, options, &report);
+    if (had_uvs && !assets.mesh.albedo.empty()) {
+        const int size = std::max(options.size, std::max(assets.mesh.albedo.width(), assets.mesh.albedo.height()));
+        atlas.albedo = rebake_texture(assets.mesh, assets.mesh.albedo, atlas, size);
+        log_info("{}: albedo texture re-baked onto the new atlas ({}x{})", d.mesh, size, size);
+    }
+    assets.mesh = std::move(atlas);
+    log_info("atlas: {} charts, {:.1f} % of texels used, {:.2f} s", report.chart_count, 100.0 * report.utilisation,
+             report.seconds);
+}
+
+// Training lays the tactile map and learns its maps over the mesh's UVs: say what is wrong with
+// them (the counts `tdf atlas` reports) instead of training silently on a broken layout.
+void warn_about_uvs(const TriangleMesh& mesh, const SceneDescription& d) {
+    const AtlasReport r = measure_atlas(mesh, 1024);
+    std::string problems;
+    const auto add = [&problems](std::size_t count, const std::string& what) {
+        if (count > 0) problems += fmt::format("{}{} {}", problems.empty() ? "" : ", ", count, what);
+    };
+    add(r.overlaps, "overlapping triangle pairs (the faces share texels)");
+    add(r.unmapped_faces, "unmapped faces (no UV area, or outside [0, 1])");
+    add(r.mirrored_charts, fmt::format("mirrored charts ({} flipped triangles; shaded right with the handed tangents, "
+                                       "but the tactile map runs mirrored there)", r.flipped_triangles));
+    if (problems.empty()) return;
+    log_warning("{}: the mesh's UVs have {}; set \"uv\": {{\"reunwrap\": true}} in the scene to train on a new atlas",
+                d.mesh, problems);
+}
+
 }  // namespace
 
 TactileLayoutTransform resolve_tactile_layout(const SceneDescription& d, const TriangleMesh& mesh, int map_width,
@@ -60,18 +104,22 @@ std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
     options.load_textures = d.albedo_source == "mesh";
     if (!std::filesystem::exists(d.mesh)) throw_error("{}: mesh '{}' does not exist", d.path, d.mesh);
     assets->mesh = load_mesh(d.mesh, options);
-    if (d.normalize) normalize_mesh(assets->mesh, d.normalize_bound);
-    const bool maps_need_uvs = !d.tactile_images.empty() || !d.label_map.empty();
-    if (maps_need_uvs && !assets->mesh.has_uvs() && d.albedo_source != "image") {
-        // Vertex-coloured meshes from image-to-3D tools have no UVs (spec 13.9): give them an atlas
-        // so the tactile map has somewhere to go.
-        log_info("{}: the mesh has no UVs; unwrapping it with `tdf atlas`'s defaults (run `tdf atlas` to choose "
-                 "the settings)", d.mesh);
-        AtlasReport report;
-        assets->mesh = build_atlas(assets->mesh, AtlasOptions{}, &report);
-        log_info("atlas: {} charts, {:.1f} % of texels used, {:.2f} s", report.chart_count,
-                 100.0 * report.utilisation, report.seconds);
+    if (d.normalize) {
+        // Recorded so the exported asset goes back to the file's coordinates (export_mesh).
+        const Bounds3 b = compute_bounds(assets->mesh);
+        const Vec3f e = b.extent();
+        normalize_mesh(assets->mesh, d.normalize_bound);
+        assets->normalization.center = b.center();
+        assets->normalization.scale = 2.0f * d.normalize_bound / std::max(e.x, std::max(e.y, e.z));
     }
+    const bool maps_need_uvs = !d.tactile_images.empty() || !d.label_map.empty();
+    if (d.uv_reunwrap && (d.albedo_source == "image" || !d.label_map.empty()))
+        throw_error("{}: uv.reunwrap replaces the mesh's UVs, which {} follows; re-bake it with `tdf atlas` instead",
+                    d.path, d.albedo_source == "image" ? "albedo.image" : "label_map");
+    if (d.uv_reunwrap || (maps_need_uvs && !assets->mesh.has_uvs() && d.albedo_source != "image"))
+        reunwrap(*assets, d);
+    else if (!d.tactile_images.empty() && assets->mesh.has_uvs())
+        warn_about_uvs(assets->mesh, d);
     assets->scene = std::make_unique<EmbreeScene>(assets->mesh);
 
     using Source = SurfaceMaterial::AlbedoSource;
@@ -112,6 +160,7 @@ std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
         m.label = &assets->label;
     }
     assets->settings.shading = parse_shading_mode(d.shading);
+    assets->settings.color_space = parse_color_space(d.color_space);
     assets->settings.background = d.background;
     assets->settings.visibility = parse_visibility(d.renderer);
     assets->settings.antialias = d.antialias;
@@ -154,6 +203,14 @@ Light scene_light(const SceneDescription& d, const SceneView& view, std::size_t 
         light.vector = sample_magic3d_light(rng, view.camera.position);
     }
     return light;
+}
+
+TriangleMesh SceneAssets::export_mesh() const {
+    TriangleMesh out = mesh;
+    out.albedo = Image();
+    const float inverse = 1.0f / normalization.scale;
+    for (Vec3f& p : out.positions) p = p * inverse + normalization.center;
+    return out;
 }
 
 }  // namespace tdf

@@ -1,3 +1,4 @@
+#include <tdf/core/error.h>
 #include <tdf/render/shading.h>
 
 #include <cmath>
@@ -19,6 +20,14 @@ Vec3f sample_magic3d_light(Rng& rng, Vec3f camera_position) {
 Vec3f orbit_direction(float elevation_deg, float azimuth_deg) {
     const float e = radians(elevation_deg), a = radians(azimuth_deg);
     return {std::cos(e) * std::sin(a), -std::sin(e), std::cos(e) * std::cos(a)};
+}
+
+const char* color_space_name(ColorSpace space) { return space == ColorSpace::Raw ? "raw" : "srgb"; }
+
+ColorSpace parse_color_space(const std::string& name) {
+    if (name == "raw") return ColorSpace::Raw;
+    if (name == "srgb") return ColorSpace::Srgb;
+    throw_error("unknown color space '{}' (valid: raw, srgb)", name);
 }
 
 }  // namespace tdf

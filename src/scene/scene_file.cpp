@@ -264,6 +264,11 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     const std::string tangents = one_of(root, "tangents", "handed", {"handed", "reference"});
     s.tangents = tangents == "handed" ? TangentMode::Handed : TangentMode::Reference;
 
+    s.object_name = root.get<std::string>("object_name", "");
+    ConfigReader uv = root.child("uv");
+    s.uv_reunwrap = uv.get<bool>("reunwrap", false);
+    uv.check_all_read();
+
     ConfigReader albedo = root.child("albedo");
     s.albedo_source = one_of(albedo, "source", "mesh", {"mesh", "image", "vertex_colors", "constant"});
     s.albedo_image = resolve_path(base, albedo.get<std::string>("image", ""));
@@ -290,6 +295,7 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     s.renderer = one_of(root, "renderer", s.renderer, {"ray", "raster"});
     s.antialias = root.get<bool>("antialias", s.renderer == "raster");
     s.background = read_vec3(root, "background", s.background);
+    s.color_space = one_of(root, "color_space", s.color_space, {"raw", "srgb"});
     s.passes = string_list(root, "passes", s.passes);
     if (s.passes.empty()) throw_error("{}: 'passes' is empty", path);
     const std::int64_t seed = root.get<std::int64_t>("seed", 0);
@@ -337,6 +343,8 @@ Json SceneDescription::to_json() const {
         {"normalize", normalize},
         {"normalize_bound", normalize_bound},
         {"tangents", tangents == TangentMode::Handed ? "handed" : "reference"},
+        {"object_name", object_name},
+        {"uv", {{"reunwrap", uv_reunwrap}}},
         {"albedo", {{"source", albedo_source}, {"image", absolute(albedo_image)}, {"color", vec(albedo_color)}}},
         {"tactile", {{"images", tactile}}},
         {"label_map", absolute(label_map)},
@@ -346,6 +354,7 @@ Json SceneDescription::to_json() const {
         {"renderer", renderer},
         {"antialias", antialias},
         {"background", vec(background)},
+        {"color_space", color_space},
         {"passes", passes},
         {"seed", seed},
         {"views",

@@ -1,5 +1,6 @@
 #include <tdf/train/asset_export.h>
 
+#include <tdf/core/atomic_file.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_writer.h>
@@ -15,9 +16,10 @@
 namespace tdf {
 
 BakedMaps export_asset(const std::string& folder, const std::string& name, const std::string& postfix,
-                       const TextureField& field, const TriangleMesh& mesh, const RunConfig& config) {
+                       const TextureField& field, const TriangleMesh& mesh, const RunConfig& config,
+                       const TriangleMesh* export_mesh) {
     BakedMaps maps = bake_field(field, mesh, config.texture_size, config.gutter);
-    write_asset(folder, name, postfix, maps, mesh, config);
+    write_asset(folder, name, postfix, maps, export_mesh ? *export_mesh : mesh, config);
     return maps;
 }
 
@@ -26,9 +28,11 @@ void write_asset(const std::string& folder, const std::string& name, const std::
     const std::string stem = name + postfix;
     const std::string base = folder + "/" + stem;
     // Matches reference: 8-bit maps by truncation (spec 1.5 step 6, 13.20); EXRs keep floats.
-    write_png(base + "_albedo.png", maps.albedo, 8, Quantize::Truncate);
-    const Image encoded_normals = encode_normal_map(maps.tactile_normal);
-    write_png(base + "_tactile_normal.png", encoded_normals, 8, Quantize::Truncate);
+    // The albedo is stored as it is rendered and trained (the input's own values, sRGB-encoded
+    // for a texture): exactly what glTF's baseColorTexture and an OBJ's map_Kd hold.
+    const std::string albedo_png = base + "_albedo.png", normal_png = base + "_tactile_normal.png";
+    write_png(albedo_png, maps.albedo, 8, Quantize::Truncate);
+    write_png(normal_png, encode_normal_map(maps.tactile_normal), 8, Quantize::Truncate);
     if (config.write_exr) {
         write_exr(base + "_albedo.exr", maps.albedo, ExrPixelType::Float);
         write_exr(base + "_tactile_normal.exr", maps.tactile_normal, ExrPixelType::Float);
@@ -38,7 +42,13 @@ void write_asset(const std::string& folder, const std::string& name, const std::
     material.albedo_map = stem + "_albedo.png";
     material.normal_map = stem + "_tactile_normal.png";
     write_obj(base + ".obj", mesh, material);
-    if (config.write_glb) write_glb(base + ".glb", mesh, &maps.albedo, &encoded_normals);
+    if (config.write_glb) {
+        // The GLB embeds the very bytes of the PNG files beside it.
+        GlbMaps glb_maps;
+        glb_maps.albedo_png = read_text_file(albedo_png);
+        glb_maps.normal_png = read_text_file(normal_png);
+        write_glb(base + ".glb", mesh, glb_maps);
+    }
     log_info("exported {}.obj (+ .mtl{}, maps {}x{})", base, config.write_glb ? ", .glb" : "", maps.albedo.width(),
              maps.albedo.height());
 }

@@ -17,7 +17,9 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <filesystem>
+#include <set>
 
 namespace tdf {
 
@@ -32,16 +34,72 @@ std::string texture_name_of(const std::string& path) {
     return cut == std::string::npos ? stem : stem.substr(0, cut);
 }
 
-std::string make_prompt(const std::string& mesh_path, const std::string& tactile_path) {
-    const std::string mesh_obj = fs::path(mesh_path).parent_path().filename().string();
+std::string make_prompt(const std::string& object_name, const std::string& tactile_path) {
     const std::string texture = texture_name_of(tactile_path);
     try {
-        return textured_prompt(mesh_obj, texture);
+        return textured_prompt(object_name, texture);
     } catch (const Error&) {
         // A texture outside the reference's table: its own name describes it.
-        return object_words(mesh_obj) + " with " + texture + " texture" + kPromptSuffix;
+        return object_words(object_name) + " with " + texture + " texture" + kPromptSuffix;
     }
 }
+
+// Words of a file or node name: split at '_', '-', '.' and spaces, then at lower-to-upper case
+// changes, lower-cased, without digit-only tokens and words that name the file rather than the
+// object (checked before and after the case split: "RichDreamer", "WaterBottleMesh").
+std::string name_words(const std::string& name) {
+    static const std::set<std::string> kGeneric = {
+        "mesh",     "model",  "scene", "object",       "obj",       "gltf",     "glb",       "ply",
+        "untitled", "export", "final", "triangulated", "triangles", "textured", "decimated", "simplified",
+        "remeshed", "lowpoly", "highpoly", "base",     "geometry",  "richdreamer", "instantmesh", "node", "root"};
+    const auto lower = [](std::string t) {
+        for (char& c : t) c = char(std::tolower(static_cast<unsigned char>(c)));
+        return t;
+    };
+    const auto keep = [&](const std::string& t) {
+        return !t.empty() && !kGeneric.count(lower(t)) && t.find_first_not_of("0123456789") != std::string::npos;
+    };
+    std::vector<std::string> tokens(1);
+    for (const char c : name) {
+        if (c == '_' || c == '-' || c == '.' || std::isspace(static_cast<unsigned char>(c)))
+            tokens.emplace_back();
+        else
+            tokens.back().push_back(c);
+    }
+    std::string words;
+    for (const std::string& token : tokens) {
+        if (!keep(token)) continue;
+        std::vector<std::string> parts(1);
+        for (std::size_t i = 0; i < token.size(); ++i) {
+            const bool camel = i > 0 && std::isupper(static_cast<unsigned char>(token[i])) &&
+                               std::islower(static_cast<unsigned char>(token[i - 1]));
+            if (camel) parts.emplace_back();
+            parts.back().push_back(token[i]);
+        }
+        for (const std::string& part : parts)
+            if (keep(part)) words += (words.empty() ? "" : " ") + lower(part);
+    }
+    return words;
+}
+
+}  // namespace
+
+std::string object_name_for_prompt(const SceneDescription& d, const TriangleMesh& mesh) {
+    if (!d.object_name.empty()) return d.object_name;
+    // The mesh file's stem ("Avocado.gltf", the reference's "<obj>/<obj>_mesh.obj").
+    std::string words = name_words(fs::path(d.mesh).stem().string());
+    if (!words.empty()) return words;
+    // A generic file name ("scene.gltf", "model.obj"): the input's one named node or object.
+    std::set<std::string> objects;
+    for (const FaceGroup& g : mesh.face_groups)
+        if (!name_words(g.object).empty()) objects.insert(name_words(g.object));
+    if (objects.size() == 1) return *objects.begin();
+    // The reference's choice (spec 1.1): the mesh file's folder.
+    words = name_words(fs::path(d.mesh).parent_path().filename().string());
+    return words.empty() ? "object" : words;
+}
+
+namespace {
 
 std::unique_ptr<GuidanceBackend> make_backend(const std::string& name, const RunConfig& config,
                                               const std::vector<std::string>& tactile_images) {
@@ -93,7 +151,7 @@ void run_optimize(const OptimizeOptions& options) {
     target.mesh = &assets->mesh;
     target.scene = assets->scene.get();
     target.material = &assets->material;
-    target.prompt = make_prompt(description.mesh, description.tactile_images.front());
+    target.prompt = make_prompt(object_name_for_prompt(description, assets->mesh), description.tactile_images.front());
     Json resolved = description.to_json();
     const Json config_json = config.to_json();
     for (auto it = config_json.begin(); it != config_json.end(); ++it) resolved[it.key()] = *it;
@@ -145,6 +203,8 @@ void run_optimize(const OptimizeOptions& options) {
         write_text_atomically(base + "_loss_plot.svg", log.to_svg(config.init_iterations));
     };
 
+    // Exports go back to the input's coordinates (the scene may normalise the mesh for training).
+    const TriangleMesh export_mesh = assets->export_mesh();
     ProgressReporter progress("optimize", std::size_t(config.iterations), 10);
     progress.advance(std::size_t(trainer.iteration()));
     const int last_iteration =
@@ -170,7 +230,7 @@ void run_optimize(const OptimizeOptions& options) {
         }
         if (done == config.init_iterations && config.init_iterations < config.iterations) {
             progress.finish();
-            write_asset(options.output_dir, name, "_initialized", trainer.export_maps(), assets->mesh, config);
+            write_asset(options.output_dir, name, "_initialized", trainer.export_maps(), export_mesh, config);
             // The quality measure is taken here, after the matching phase.
             const QualityReport matched = trainer.evaluate_held_out();
             write_text_atomically(base + "_initialized_report.json",
@@ -190,7 +250,7 @@ void run_optimize(const OptimizeOptions& options) {
     }
 
     const BakedMaps maps = trainer.export_maps();
-    write_asset(options.output_dir, name, "", maps, assets->mesh, config);
+    write_asset(options.output_dir, name, "", maps, export_mesh, config);
     const QualityReport quality = trainer.evaluate_held_out();
     write_turntable(options.output_dir, assets->mesh, *assets->scene, maps, config.turntable_views,
                     config.turntable_resolution);

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "common/test_paths.h"
 
@@ -72,8 +73,9 @@ TEST(MeshWriter, GlbHasValidChunksAttributesAndEmbeddedMaps) {
     EXPECT_EQ(header[4], 0x4E4F534Au);
     const auto json = nlohmann::json::parse(bytes.substr(20, header[3]));
     const auto& attributes = json["meshes"][0]["primitives"][0]["attributes"];
-    for (const char* name : {"POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "COLOR_0"})
+    for (const char* name : {"POSITION", "NORMAL", "TANGENT", "TEXCOORD_0"})
         EXPECT_TRUE(attributes.contains(name)) << name;
+    EXPECT_FALSE(attributes.contains("COLOR_0")) << "the albedo texture replaces the vertex colours";
     EXPECT_TRUE(json["materials"][0]["pbrMetallicRoughness"].contains("baseColorTexture"));
     EXPECT_TRUE(json["materials"][0].contains("normalTexture"));
     EXPECT_EQ(json["images"].size(), 2u);
@@ -90,4 +92,156 @@ TEST(MeshWriter, GlbHasValidChunksAttributesAndEmbeddedMaps) {
 
 TEST(MeshWriter, EmptyMeshIsAnError) {
     EXPECT_THROW(write_obj(test::scratch_dir() + "/empty.obj", TriangleMesh{}), Error);
+}
+
+namespace {
+
+struct GlbFile {
+    nlohmann::json json;
+    std::string bin;
+};
+GlbFile read_glb(const std::string& path) {
+    const std::string bytes = read_text_file(path);
+    std::uint32_t json_length = 0, bin_length = 0;
+    std::memcpy(&json_length, bytes.data() + 12, 4);
+    std::memcpy(&bin_length, bytes.data() + 20 + json_length, 4);
+    return {nlohmann::json::parse(bytes.substr(20, json_length)),
+            bytes.substr(20 + json_length + 8, bin_length)};
+}
+std::string view_bytes(const GlbFile& glb, std::size_t view_index) {
+    const auto& view = glb.json["bufferViews"][view_index];
+    return glb.bin.substr(view["byteOffset"].get<std::size_t>(), view["byteLength"].get<std::size_t>());
+}
+
+// Two quads in world coordinates as a glTF loader leaves them: node "plain" (identity) and node
+// "moved" whose matrix (scale 2, quarter turn about z, translation, optionally mirrored in x) the
+// loader applied.
+TriangleMesh two_node_mesh(bool mirror) {
+    TriangleMesh mesh;
+    const auto matrix = [mirror](Vec3f p) {  // world = M local
+        const float sx = mirror ? -1.f : 1.f;
+        return Vec3f{-2.f * p.y + 5.f, 2.f * sx * p.x + 1.f, 2.f * p.z - 3.f};
+    };
+    const Vec3f quad[4] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    for (const Vec3f& p : quad) mesh.positions.push_back(p);
+    for (const Vec3f& p : quad) mesh.positions.push_back(matrix(p));
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+    if (mirror)
+        mesh.triangles[2] = {4, 6, 5}, mesh.triangles[3] = {4, 7, 6};  // the loader keeps CCW in world
+    mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    mesh.uv_triangles = {{0, 1, 2}, {0, 2, 3}, {0, 1, 2}, {0, 2, 3}};
+    if (mirror) mesh.uv_triangles[2] = {0, 2, 1}, mesh.uv_triangles[3] = {0, 3, 2};
+    finish_loaded_mesh(mesh, "two nodes", {});
+    FaceGroup plain, moved;
+    plain.object = "plain";
+    plain.group = "plain_mesh";
+    plain.gltf_node = 0;
+    plain.gltf_mesh = 0;
+    plain.gltf_primitive = 0;
+    moved.object = "moved";
+    moved.group = "moved_mesh";
+    moved.gltf_node = 3;
+    moved.gltf_mesh = 1;
+    moved.gltf_primitive = 0;
+    const float sx = mirror ? -1.f : 1.f;
+    moved.world_from_node = {0, 2 * sx, 0, 0, -2, 0, 0, 0, 0, 0, 2, 0, 5, 1, -3, 1};
+    mesh.face_groups = {plain, moved};
+    mesh.face_group = {0, 0, 1, 1};
+    return mesh;
+}
+
+}  // namespace
+
+TEST(MeshWriter, ObjWritesTheRendererNormalsAndTheInputGroups) {
+    TriangleMesh mesh = coloured_quad();
+    mesh.face_groups = {FaceGroup{"body", "front", "cloth"}, FaceGroup{"body", "back", "cloth"}};
+    mesh.face_group = {0, 1};
+    const std::string path = test::scratch_dir() + "/writer_normals.obj";
+    write_obj(path, mesh, ObjMaterial{"mat", "albedo.png", "normal.png"});
+    const std::string text = read_text_file(path);
+    std::vector<Vec3f> normals;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);)
+        if (line.rfind("vn ", 0) == 0) {
+            Vec3f n;
+            std::istringstream(line.substr(3)) >> n.x >> n.y >> n.z;
+            normals.push_back(n);
+        }
+    ASSERT_EQ(normals.size(), mesh.positions.size());
+    for (std::size_t i = 0; i < normals.size(); ++i)
+        EXPECT_LT(length(normals[i] - mesh.normals[i]), 1e-6f) << "vn " << i + 1;
+    EXPECT_NE(text.find("f 1/1/1 2/2/2 3/3/3"), std::string::npos) << text;
+    EXPECT_EQ(text.find("o body"), text.rfind("o body")) << "one `o` line for the one object";
+    EXPECT_LT(text.find("g front"), text.find("g back"));
+    // Our reader still reads it (and recomputes the same normals).
+    MeshLoadOptions options;
+    options.load_textures = false;
+    const TriangleMesh loaded = load_obj(path, options);
+    ASSERT_EQ(loaded.normals.size(), mesh.normals.size());
+    EXPECT_LT(length(loaded.normals[3] - mesh.normals[3]), 1e-6f);
+}
+
+TEST(MeshWriter, GlbEmbedsTheGivenPngBytesAndLeavesVertexColoursToTheTexture) {
+    const TriangleMesh mesh = coloured_quad();
+    GlbMaps maps;
+    maps.albedo_png = encode_png_bytes(Image(3, 2, 3, 0.3f), Quantize::Truncate);
+    maps.normal_png = encode_png_bytes(Image(2, 2, 3, 0.5f), Quantize::Truncate);
+    const std::string path = test::scratch_dir() + "/writer_bytes.glb";
+    write_glb(path, mesh, maps);
+    const GlbFile glb = read_glb(path);
+    ASSERT_EQ(glb.json["images"].size(), 2u);
+    EXPECT_EQ(view_bytes(glb, glb.json["images"][0]["bufferView"]), maps.albedo_png);
+    EXPECT_EQ(view_bytes(glb, glb.json["images"][1]["bufferView"]), maps.normal_png);
+    EXPECT_FALSE(glb.json["meshes"][0]["primitives"][0]["attributes"].contains("COLOR_0"))
+        << "glTF would multiply the vertex colours into the texture";
+    // The same PNG file write_png writes.
+    const std::string file = test::scratch_dir() + "/writer_bytes_albedo.png";
+    write_png(file, Image(3, 2, 3, 0.3f), 8, Quantize::Truncate);
+    EXPECT_EQ(read_text_file(file), maps.albedo_png);
+}
+
+TEST(MeshWriter, GlbKeepsTheInputNodesAndWritesPositionsInNodeCoordinates) {
+    for (const bool mirror : {false, true}) {
+        SCOPED_TRACE(mirror ? "mirroring node matrix" : "rotation, scale, translation");
+        const TriangleMesh mesh = two_node_mesh(mirror);
+        const std::string path = test::scratch_dir() + "/writer_nodes.glb";
+        write_glb(path, mesh);
+        const GlbFile glb = read_glb(path);
+        ASSERT_EQ(glb.json["nodes"].size(), 2u);
+        ASSERT_EQ(glb.json["meshes"].size(), 2u);
+        EXPECT_EQ(glb.json["nodes"][0]["name"], "plain");
+        EXPECT_FALSE(glb.json["nodes"][0].contains("matrix"));
+        EXPECT_EQ(glb.json["nodes"][1]["name"], "moved");
+        EXPECT_EQ(glb.json["meshes"][1]["name"], "moved_mesh");
+        ASSERT_TRUE(glb.json["nodes"][1].contains("matrix"));
+        EXPECT_EQ(glb.json["nodes"][1]["matrix"][12].get<double>(), 5.0);
+        // The moved node's mesh is the unit quad again in its own coordinates.
+        const auto& position =
+            glb.json["accessors"]
+                    [glb.json["meshes"][1]["primitives"][0]["attributes"]["POSITION"].get<std::size_t>()];
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(position["min"][k].get<double>(), 0.0, 1e-6) << k;
+            EXPECT_NEAR(position["max"][k].get<double>(), k < 2 ? 1.0 : 0.0, 1e-6) << k;
+        }
+        // Read back by our loader (which applies the matrices): the same surface, same winding.
+        MeshLoadOptions options;
+        options.load_textures = false;
+        const TriangleMesh loaded = load_mesh(path, options);
+        ASSERT_EQ(loaded.triangles.size(), mesh.triangles.size());
+        for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+            const auto face_normal = [](const TriangleMesh& m, std::size_t face) {
+                const Vec3i t = m.triangles[face];
+                return normalize_or_zero(
+                    cross(m.positions[std::size_t(t.y)] - m.positions[std::size_t(t.x)],
+                          m.positions[std::size_t(t.z)] - m.positions[std::size_t(t.x)]));
+            };
+            EXPECT_LT(length(face_normal(loaded, f) - face_normal(mesh, f)), 1e-5f) << "face " << f;
+            Vec3f a{0, 0, 0}, b{0, 0, 0};
+            for (int k = 0; k < 3; ++k) {
+                a += loaded.positions[std::size_t(loaded.triangles[f][k])];
+                b += mesh.positions[std::size_t(mesh.triangles[f][k])];
+            }
+            EXPECT_LT(length(a - b), 1e-5f) << "face " << f;
+        }
+    }
 }

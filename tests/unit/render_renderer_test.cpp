@@ -155,3 +155,27 @@ TEST(Renderer, BitIdenticalForAnyThreadCount) {
     }
     for (std::size_t k = 0; k < passes.size(); ++k) EXPECT_EQ(one.images[k].values(), two.images[k].values());
 }
+
+TEST(Renderer, SrgbColorSpaceShadesInLinearLightAndKeepsTheAlbedoPass) {
+    const TriangleMesh quad = make_quad(1.f);
+    const EmbreeScene scene(quad);
+    SurfaceMaterial material;
+    material.albedo_constant = {0.5f, 0.25f, 0.75f};
+    const Light light{Light::Kind::Directional, normalize_or_zero({0.f, 1.f, 1.f}), 0.1f};
+    const Camera cam = Camera::orbit(0, 0, 2, 90, 16, 16);
+    const float shade = 0.1f + 0.9f * std::sqrt(0.5f);
+    for (const ColorSpace space : {ColorSpace::Raw, ColorSpace::Srgb}) {
+        RenderSettings settings;
+        settings.color_space = space;
+        const Renderer renderer(quad, scene, material, settings);
+        const Frame frame = renderer.render(cam, light, {Pass::Albedo, Pass::Lambertian});
+        const Vec3f expected = lit_color(material.albedo_constant, shade, space);
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(frame.images[1].at(8, 8, k), expected[k], 1e-5f) << color_space_name(space);
+            EXPECT_EQ(frame.images[0].at(8, 8, k), material.albedo_constant[k]) << "the albedo pass is the stored colour";
+        }
+    }
+    // The two differ (sRGB lightens the shaded mid-tones).
+    EXPECT_GT(lit_color(material.albedo_constant, shade, ColorSpace::Srgb).x,
+              lit_color(material.albedo_constant, shade, ColorSpace::Raw).x + 0.05f);
+}

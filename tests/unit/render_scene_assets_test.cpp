@@ -1,4 +1,5 @@
 #include <tdf/core/error.h>
+#include <tdf/atlas/uv_atlas.h>
 #include <tdf/render/scene_assets.h>
 #include <tdf/tactile/tactile_map.h>
 
@@ -98,4 +99,34 @@ TEST(SceneAssets, NormalMapDecodingFollowsSpec) {
     EXPECT_NEAR(n.at(0, 0, 1), 0.00392f, 1e-5f);
     EXPECT_FLOAT_EQ(n.at(0, 0, 2), 1.f);
     EXPECT_THROW(decode_tactile_map(Image(1, 1, 1), {}, "gray.png"), Error);
+}
+
+TEST(SceneAssets, NormalisedMeshExportsInTheFileCoordinatesAndReunwrapReplacesBadUvs) {
+    // A quad strip far from the origin whose UVs all overlap (every face on the same UV triangle).
+    const std::string folder = test::scratch_dir() + "/assets_reunwrap";
+    std::filesystem::create_directories(folder);
+    {
+        std::ofstream obj(folder + "/strip.obj");
+        obj << "v 100 10 5\nv 104 10 5\nv 108 10 5\nv 100 12 5\nv 104 12 5\nv 108 12 5\n"
+               "vt 0.1 0.1\nvt 0.9 0.1\nvt 0.9 0.9\n"
+               "f 1/1 2/2 5/3\nf 1/1 5/2 4/3\nf 2/1 3/2 6/3\nf 2/1 6/2 5/3\n";
+    }
+    const std::string tactile = test::source_dir() + "/scenes/pebble_sphere/tactile_normal.png";
+    std::ofstream(folder + "/scene.json") << "{\"mesh\": \"strip.obj\", \"normalize\": true, \"albedo\": {\"source\": "
+                                             "\"constant\"}, \"tactile\": {\"images\": [\"" + tactile + "\"]}}";
+    const auto kept = load_scene_assets(load_scene(folder + "/scene.json"));
+    EXPECT_GT(count_uv_overlaps(kept->mesh), 0u);
+    const Bounds3 b = compute_bounds(kept->mesh);
+    EXPECT_NEAR(b.upper.x, 0.9f, 1e-5f);  // normalised for rendering and training
+    const TriangleMesh exported = kept->export_mesh();
+    EXPECT_NEAR(exported.positions[2].x, 108.f, 1e-3f);
+    EXPECT_NEAR(exported.positions[5].y, 12.f, 1e-4f);
+    EXPECT_NEAR(exported.positions[0].z, 5.f, 1e-4f);
+
+    const auto fixed = load_scene_assets(load_scene(folder + "/scene.json", {"uv.reunwrap=true"}));
+    ASSERT_TRUE(fixed->mesh.has_uvs());
+    EXPECT_EQ(count_uv_overlaps(fixed->mesh), 0u);
+    EXPECT_EQ(fixed->mesh.triangles.size(), kept->mesh.triangles.size());
+    EXPECT_THROW(load_scene_assets(load_scene(folder + "/scene.json", {"uv.reunwrap=true", "label_map=\"" + tactile + "\""})),
+                 Error);
 }

@@ -1,3 +1,4 @@
+#include <tdf/core/error.h>
 #include <tdf/render/shading.h>
 
 #include <gtest/gtest.h>
@@ -55,4 +56,24 @@ TEST(Shading, ShadeFormulas) {
     const Vec3f d = orbit_direction(0, 90);
     EXPECT_NEAR(d.x, 1.f, 1e-6f);
     EXPECT_NEAR(orbit_direction(30, 0).y, -0.5f, 1e-6f);
+}
+
+TEST(ColorSpace, RawMultipliesStoredValuesAndSrgbShadesInLinearLight) {
+    const Vec3f albedo{0.5f, 0.2f, 1.0f};
+    // Raw: the reference's product, clamped.
+    const Vec3f raw = lit_color(albedo, 0.5f, ColorSpace::Raw);
+    EXPECT_FLOAT_EQ(raw.x, 0.25f);
+    EXPECT_FLOAT_EQ(lit_color(albedo, 1.5f, ColorSpace::Raw).z, 1.0f);
+    // sRGB: 0.5 decodes to 0.21404, half of it is 0.10702, which encodes to 0.36080.
+    const Vec3f srgb = lit_color(albedo, 0.5f, ColorSpace::Srgb);
+    EXPECT_NEAR(srgb.x, 0.36080f, 1e-4f);
+    EXPECT_GT(srgb.y, raw.y) << "shading in linear light darkens mid-tones less than the raw product";
+    // Full light shows the stored colour in both; the transfer functions invert each other.
+    for (float c : {0.0f, 0.003f, 0.04f, 0.2f, 0.5f, 0.9f, 1.0f}) {
+        EXPECT_NEAR(lit_color({c, c, c}, 1.0f, ColorSpace::Srgb).x, c, 2e-6f) << c;
+        EXPECT_NEAR(srgb_to_linear(linear_to_srgb(c)), c, 2e-6f) << c;
+    }
+    EXPECT_EQ(parse_color_space("srgb"), ColorSpace::Srgb);
+    EXPECT_STREQ(color_space_name(ColorSpace::Raw), "raw");
+    EXPECT_THROW(parse_color_space("linear"), Error);
 }

@@ -254,3 +254,60 @@ TEST(Optimize, UnwritableOutputIsAClearError) {
     options.output_dir = "/proc/tdf_cannot_write_here";
     EXPECT_THROW(run_optimize(options), Error);
 }
+
+TEST(Optimize, ExportsInTheInputCoordinatesAndEmbedsThePngFilesInTheGlb) {
+    // A sphere of radius 30 around (100, -20, 5), trained normalised: the exports keep its size
+    // and place, and the GLB holds the very bytes of the PNG maps beside it.
+    TriangleMesh sphere = make_uv_sphere(30.f, 16, 8, TangentMode::Handed);
+    for (Vec3f& p : sphere.positions) p += Vec3f{100.f, -20.f, 5.f};
+    const std::string folder = test::scratch_dir() + "/placed";
+    fs::create_directories(folder);
+    write_obj(folder + "/placed_pebble.obj", sphere, ObjMaterial{});
+    const std::string scene = folder + "/scene.json";
+    write_text_atomically(scene, "{\"mesh\": \"placed_pebble.obj\", \"normalize\": true, \"albedo\": {\"source\": "
+                                 "\"constant\"}, \"tactile\": {\"images\": [\"" + test::source_dir() +
+                                     "/scenes/pebble_sphere/tactile_normal.png\"]}}");
+    OptimizeOptions options;
+    options.scene_path = scene;
+    options.overrides = small_run(2, 1);
+    options.output_dir = folder + "/out";
+    options.name = "placed";
+    fs::remove_all(options.output_dir);
+    run_optimize(options);
+    const std::string base = options.output_dir + "/placed";
+    MeshLoadOptions load;
+    load.load_textures = false;
+    for (const char* file : {".obj", ".glb"}) {
+        const TriangleMesh exported = load_mesh(base + file, load);
+        const Bounds3 a = compute_bounds(exported), b = compute_bounds(sphere);
+        EXPECT_LT(length(a.lower - b.lower), 1e-3f) << file;
+        EXPECT_LT(length(a.upper - b.upper), 1e-3f) << file;
+    }
+    const std::string glb = read_text_file(base + ".glb");
+    for (const char* map : {"_albedo.png", "_tactile_normal.png"}) {
+        const std::string png = read_text_file(base + map);
+        EXPECT_NE(glb.find(png), std::string::npos) << map << " is not embedded byte for byte";
+    }
+}
+
+TEST(Optimize, PromptObjectComesFromTheSceneKeyTheMeshFileOrItsNodes) {
+    SceneDescription d;
+    TriangleMesh mesh;
+    d.mesh = "/data/avocado_gltf/Avocado.gltf";
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "avocado");
+    d.mesh = "/data/base_meshes/an_avocado_2/an_avocado_2_mesh.obj";  // the reference's layout
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "an avocado");
+    d.mesh = "/data/meshes/spot/spot_triangulated.obj";
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "spot");
+    d.mesh = "/downloads/WaterBottle.glb";
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "water bottle");
+    d.mesh = "/gen/an_owl_RichDreamer/an_owl_RichDreamer_mesh.obj";  // generator names go, as in the reference
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "an owl");
+    d.mesh = "/downloads/old_chair/scene.gltf";  // generic name: the one named node
+    mesh.face_groups = {FaceGroup{"Teapot_01", "mesh0", ""}, FaceGroup{"Teapot_01", "mesh1", ""}};
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "teapot");
+    mesh.face_groups.push_back(FaceGroup{"Lid", "mesh2", ""});  // several: the folder
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "old chair");
+    d.object_name = "a ceramic mug";
+    EXPECT_EQ(object_name_for_prompt(d, mesh), "a ceramic mug");
+}

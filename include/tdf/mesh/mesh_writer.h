@@ -3,6 +3,7 @@
 /// Both are written atomically (temporary name, then rename) and throw tdf::Error naming the
 /// file when they cannot be written.
 #include <tdf/core/image.h>
+#include <tdf/io/image_io.h>
 #include <tdf/mesh/triangle_mesh.h>
 
 #include <string>
@@ -19,20 +20,43 @@ struct ObjMaterial {
 
 /// Writes `obj_path` and, beside it, `<stem>.mtl` (always: it carries the material name even
 /// without maps). Vertices are `v x y z [r g b]` (colours when the mesh has them), UVs `vt u v`
-/// in OBJ convention (v up, as TriangleMesh stores them), faces `f v/vt` (or `f v` without
-/// UVs); normals are not written since every reader, ours included, recomputes them (spec 1.2).
-/// The normal map is named twice, as `norm` and as `map_Bump -bm 1`, so that Blender's importer
-/// and other readers find it (spec 12.1).
+/// in OBJ convention (v up, as TriangleMesh stores them), normals `vn` (one per vertex, the
+/// mesh's `normals`: the renderer's area-weighted normals, so other programs shade the surface
+/// tdf shades; tdf's own reader recomputes them, spec 1.2), faces `f v/vt/vn` (`f v//vn` without
+/// UVs). The input's structure (TriangleMesh::face_groups) is kept as `o` / `g` lines, faces in
+/// their order. The normal map is named twice, as `norm` and as `map_Bump -bm 1`, so that
+/// Blender's importer and other readers find it (spec 12.1).
 void write_obj(const std::string& obj_path, const TriangleMesh& mesh, const ObjMaterial& material = {});
 
-/// Writes a binary glTF 2.0 file: one mesh, one primitive (TRIANGLES), one material with
-/// `baseColorTexture` (when `albedo` is given) and `normalTexture` (when `normal_map` is given),
-/// both embedded as 8-bit PNG (rounded). Attributes: POSITION, NORMAL, TANGENT (xyz + w
-/// handedness, glTF convention: bitangent = cross(normal, tangent) * w) and TEXCOORD_0 when
-/// the mesh has UVs, COLOR_0 when it has vertex colours. glTF's texture v points down, so
-/// TEXCOORD_0 = (u, 1 - v). Vertices are split per distinct (position, uv, tangent) corner
-/// because glTF has a single index buffer. Null images are simply left out.
+/// Maps for write_glb as PNG file bytes, embedded exactly as given (so an exporter can embed the
+/// very bytes of the PNG files it writes beside the GLB). Empty = no map.
+struct GlbMaps {
+    std::string albedo_png;  ///< `baseColorTexture`: 8-bit, sRGB-encoded as glTF defines it
+    std::string normal_png;  ///< `normalTexture`: tangent-space, OpenGL (green = +v), (n + 1) / 2
+};
+
+/// The bytes of `image` as an 8-bit PNG file, from the same encoder (write_png) as PNG files.
+std::string encode_png_bytes(const Image& image, Quantize quantize);
+
+/// Writes a binary glTF 2.0 file with one material (metallic 0, roughness 1: as close to
+/// Lambertian shading as glTF's PBR model gets): `baseColorTexture` and `normalTexture` when given.
+/// Attributes: POSITION, NORMAL, TANGENT (xyz + w handedness, glTF convention: bitangent = cross(normal,
+/// tangent) * w) and TEXCOORD_0 when the mesh has UVs, COLOR_0 when it has vertex colours and no albedo map
+/// is given (glTF would multiply the two; tdf renders the texture alone). glTF's texture v points down, so
+/// TEXCOORD_0 = (u, 1 - v). Vertices are split per distinct (position, uv, tangent) corner because glTF has a
+/// single index buffer.
+///
+/// Structure: without TriangleMesh::face_groups, one node, one mesh, one primitive. With them,
+/// the input's: for a glTF input one node per input node (its name and world matrix, flat under
+/// the scene), each with its own mesh (the input mesh's name) and one primitive per input
+/// primitive; positions, normals and tangents are written in the node's coordinates (the
+/// loader's `world_from_node` un-applied, the winding restored under a mirroring matrix). For an
+/// OBJ input one node per (`o`, `g`) pair and one primitive per `usemtl` material. Every
+/// primitive uses the one material. Throws tdf::Error for a singular node matrix.
+void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps& maps);
+
+/// write_glb with the maps encoded by encode_png_bytes (null or empty images are left out).
 void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* albedo = nullptr,
-               const Image* normal_map = nullptr);
+               const Image* normal_map = nullptr, Quantize quantize = Quantize::Round);
 
 }  // namespace tdf

@@ -74,7 +74,9 @@ void compute_normals(TriangleMesh& mesh);
 enum class TangentMode {
     /// Default: tangents accumulated per (position, uv) corner pair, so charts that meet at a
     /// seam keep their own tangent, with handedness w = -1 on mirrored charts (the shading
-    /// normal then flips its bitangent term and mirrored charts shade correctly).
+    /// normal then flips its bitangent term and mirrored charts shade correctly). Like MikkTSpace,
+    /// corners are also split by handedness, so the two sides of a mirror line that share their
+    /// UVs keep opposite tangents instead of averaging them away.
     Handed,
     /// The reference (spec 3.3): accumulated per position index, averaged by face count,
     /// handedness discarded (w = +1). Offered for parity with its renders.

@@ -11,6 +11,7 @@
 #include <tdf/mesh/triangle_mesh.h>
 #include <tdf/render/antialias.h>
 #include <tdf/render/frame.h>
+#include <tdf/render/shading.h>
 #include <tdf/render/texture.h>
 #include <tdf/scene/camera.h>
 #include <tdf/scene/embree_scene.h>
@@ -71,6 +72,9 @@ Visibility parse_visibility(const std::string& name);
 
 struct RenderSettings {
     ShadingMode shading = ShadingMode::Training;
+    /// How albedo and shade combine in the lambertian pass (shading.h lit_color); the albedo
+    /// pass shows the stored values in both (what a viewer displays for an unlit texel).
+    ColorSpace color_space = ColorSpace::Raw;
     Vec3f background{1, 1, 1};  ///< composited behind albedo and lambertian (spec 3.6: white)
     Visibility visibility = Visibility::Ray;
     /// dr.antialias on the shaded passes, as the reference applies it: training shading

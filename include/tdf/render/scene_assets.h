@@ -11,6 +11,13 @@
 
 namespace tdf {
 
+/// What load_scene_assets did to the file's coordinates ("normalize": true):
+/// scene = (file - center) * scale. Identity otherwise.
+struct MeshNormalization {
+    Vec3f center{0, 0, 0};
+    float scale = 1.0f;
+};
+
 struct SceneAssets {
     SceneDescription description;
     TriangleMesh mesh;
@@ -22,15 +29,24 @@ struct SceneAssets {
     RenderSettings settings;
     std::vector<Pass> passes;
     std::vector<SceneView> views;
+    MeshNormalization normalization;
+
+    /// `mesh` in the input file's own coordinates (normalisation undone; UVs, tangents, normals
+    /// and face groups as rendered), without the albedo image: what exports write.
+    TriangleMesh export_mesh() const;
 
     SceneAssets() = default;
     SceneAssets(const SceneAssets&) = delete;
     SceneAssets& operator=(const SceneAssets&) = delete;
 };
 
-/// Loads the mesh and images a scene names. Albedo source "mesh" uses the mesh's texture, else
-/// its vertex colours, else constant grey 0.5 with a warning (the reference's fallback, spec
-/// 1.2). Throws tdf::Error naming the scene and the file on missing or bad input.
+/// Loads the mesh and images a scene names. When the scene has tactile images and the mesh has
+/// UVs, they are measured (measure_atlas) and overlaps, unmapped faces and mirrored charts are
+/// warned about with their counts; `"uv": {"reunwrap": true}` (or a mesh without UVs) builds a
+/// new atlas with `tdf atlas`'s defaults and re-bakes the mesh's albedo texture onto it. Albedo
+/// source "mesh" uses the mesh's texture, else its vertex colours, else constant grey 0.5 with
+/// a warning (the reference's fallback, spec 1.2). Throws tdf::Error naming the scene and the
+/// file on missing or bad input.
 std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& description);
 
 

@@ -4,6 +4,10 @@
 #include <tdf/core/tangent_frame.h>
 #include <tdf/core/vec.h>
 
+#include <algorithm>
+#include <cmath>
+#include <string>
+
 namespace tdf {
 
 /// shading_normal() before its final normalisation (the visualizer's unnormalised
@@ -46,5 +50,43 @@ inline float visualizer_shade(Vec3f n, Vec3f direction_to_light, float ambient) 
 /// Direction toward the light from orbit angles in degrees (spec 3.9, same formula as orbit
 /// cameras): (cos e sin a, -sin e, cos e cos a).
 Vec3f orbit_direction(float elevation_deg, float azimuth_deg);
+
+/// How a surface colour and the light combine into the lambertian pass.
+enum class ColorSpace {
+    /// The reference (default, for parity with its renders): the stored values (8-bit texture
+    /// levels / 255, vertex colours, the constant) times the shade, clamped to [0, 1].
+    Raw,
+    /// What glTF viewers and Blender do with `baseColorTexture`: the stored values are decoded
+    /// from sRGB, multiplied by the shade in linear light, clamped, and encoded back to sRGB for
+    /// display. Decoding follows filtering here (GPUs decode texels first); the two differ only
+    /// where filtering mixes very different texels.
+    Srgb,
+};
+/// "raw" or "srgb".
+const char* color_space_name(ColorSpace space);
+/// Parses "raw" / "srgb"; throws tdf::Error otherwise.
+ColorSpace parse_color_space(const std::string& name);
+
+/// The sRGB transfer functions (IEC 61966-2-1), for values in [0, 1].
+inline float srgb_to_linear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+inline float linear_to_srgb(float c) {
+    return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
+/// The displayed colour of a surface of stored colour `albedo` lit by `shade` (ambient + diffuse,
+/// >= 0) under `space`; every channel in [0, 1].
+inline Vec3f lit_color(Vec3f albedo, float shade, ColorSpace space) {
+    Vec3f c;
+    for (int k = 0; k < 3; ++k) {
+        if (space == ColorSpace::Raw)
+            c[k] = std::clamp(albedo[k] * shade, 0.f, 1.f);
+        else
+            c[k] =
+                linear_to_srgb(std::clamp(srgb_to_linear(std::clamp(albedo[k], 0.f, 1.f)) * shade, 0.f, 1.f));
+    }
+    return c;
+}
 
 }  // namespace tdf

@@ -106,6 +106,12 @@ struct SceneDescription {
     bool normalize = false;   ///< centre and scale the largest side to 2 * normalize_bound (spec 3.9)
     float normalize_bound = 0.9f;
     TangentMode tangents = TangentMode::Handed;
+    /// What the object is, for the guidance prompt ("a ceramic mug"); empty = from the mesh file
+    /// (optimize_run's object_name_of).
+    std::string object_name;
+    /// Replace the mesh's own UVs by `tdf atlas`'s default atlas (for overlapping, mirrored or
+    /// unmapped input UVs; the mesh's albedo texture is re-baked onto the new atlas).
+    bool uv_reunwrap = false;
     std::string albedo_source = "mesh";  ///< mesh | image | vertex_colors | constant
     std::string albedo_image;            ///< resolved path, for albedo_source "image"
     Vec3f albedo_color{0.5f, 0.5f, 0.5f};  ///< for "constant"
@@ -118,6 +124,7 @@ struct SceneDescription {
     std::string renderer = "ray";        ///< ray | raster: the visibility producer
     bool antialias = false;              ///< dr.antialias; default true for raster, false for ray
     Vec3f background{1, 1, 1};
+    std::string color_space = "raw";  ///< raw (the reference) | srgb (glTF viewers), shading.h ColorSpace
     std::vector<std::string> passes = {"lambertian", "albedo", "mask"};  ///< checked by the renderer
     std::uint64_t seed = 0;
     ViewsSpec views;

@@ -15,11 +15,22 @@
 
 namespace tdf {
 
-/// Bakes `field` and writes `<folder>/<name><postfix>{.obj,.mtl,.glb,_albedo.png,
-/// _tactile_normal.png,_albedo.exr,_tactile_normal.exr}`. Every file is written atomically.
-/// Returns the baked maps for further use (turntables).
+/// Bakes `field` over `mesh` (the coordinates it was trained in) and writes the result with
+/// write_asset, writing `export_mesh` (same faces and UVs, in the input's own coordinates,
+/// SceneAssets::export_mesh) as the mesh when given, else `mesh`. Returns the baked maps for
+/// further use (turntables).
 BakedMaps export_asset(const std::string& folder, const std::string& name, const std::string& postfix,
-                       const TextureField& field, const TriangleMesh& mesh, const RunConfig& config);
+                       const TextureField& field, const TriangleMesh& mesh, const RunConfig& config,
+                       const TriangleMesh* export_mesh = nullptr);
+
+/// Writes maps that are already made (baked from a field, or a texture-space optimizer's learned
+/// maps) and the mesh: `<folder>/<name><postfix>{.obj,.mtl,.glb,_albedo.png,_tactile_normal.png,
+/// _albedo.exr,_tactile_normal.exr}` (GLB and EXRs as `config` says). Every file is written
+/// atomically; the GLB embeds the very bytes of the two PNG files. `mesh` is written as given:
+/// pass it in the input's own coordinates (SceneAssets::export_mesh), with the UVs the maps were
+/// made for.
+void write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config);
 
 /// Writes maps that are already baked (the texture-space optimizer's learned maps) with the same
 /// files as export_asset.
