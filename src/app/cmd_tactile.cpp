@@ -145,7 +145,7 @@ struct QuiltArgs {
     void add(CLI::App* app, bool convert_defaults) {
         const bool tileable_default = convert_defaults;
         options.tileable = convert_defaults;
-        if (convert_defaults) options.min_contrast = 0.5f, options.feather = 2, block = "auto";
+        if (convert_defaults) options.min_contrast = 0.9f, options.feather = 2, block = "auto";
         app->add_option(
                "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride)")
             ->check(CLI::PositiveNumber)
@@ -412,7 +412,7 @@ void run_convert(const State& s) {
                  100.0 * c.output.flat_fraction,
                  c.distance);
         MaterialLimits warn;  // "much" flatter or less similar: the yardstick's limits
-        warn.min_ratio = 0.75, warn.max_ratio = 1.35, warn.max_distance = 0.2;
+        warn.min_ratio = 0.75, warn.max_ratio = 1.35;
         for (const std::string& problem : check_material(c, warn))
             log_warning("{}: the output is {}", s.inputs[i], problem);
         reports.push_back(c.json());

@@ -167,8 +167,9 @@ MaterialStatistics material_statistics(const DetailSlopes& detail, const Image& 
         count += 1;
         s.tilt_histogram[std::size_t(std::min(kTiltBins - 1, int(t / tilt_range * kTiltBins)))] += 1;
         const double sx = detail.slopes.data()[2 * p], sy = detail.slopes.data()[2 * p + 1];
-        double angle = std::atan2(sy, sx);
+        double angle = std::atan2(sy, sx);  // direction modulo 180 degrees, in [0, pi)
         if (angle < 0) angle += kPi;
+        if (angle >= kPi) angle -= kPi;
         const int bin = std::min(kOrientationBins - 1, int(angle / kPi * kOrientationBins));
         s.orientation_histogram[std::size_t(bin)] += std::hypot(sx, sy);
     }

@@ -626,6 +626,21 @@ QuiltResult Quilter::run() {
     const double placed = double(std::max<std::size_t>(level.size() - 1, 1));
     result.stats.mean_cut_error = cut_sum / placed;
     result.stats.mean_random_error = random_sum / placed;
+    if (m_grid.wrap) {
+        // The canvas is periodic, so any origin tiles alike. Boundary cuts gather at the edges of
+        // the overlap strips (line pairs at a multiple of the stride carry ~1.3x the mean step);
+        // starting half a stride later puts the wrap-around between two ordinary lines.
+        const int shift = m_grid.stride / 2, w = m_grid.canvas;
+        Image rolled(w, w, m_channels), seams(w, w, 1);
+        for (int y = 0; y < w; ++y)
+            for (int x = 0; x < w; ++x) {
+                const int sx = (x + shift) % w, sy = (y + shift) % w;
+                std::copy(m_canvas.pixel(sx, sy), m_canvas.pixel(sx, sy) + m_channels, rolled.pixel(x, y));
+                seams.at(x, y, 0) = m_seams.at(sx, sy, 0);
+            }
+        m_canvas = std::move(rolled);
+        m_seams = std::move(seams);
+    }
     const int side = quilt_output_side(m_options);
     result.image = side == m_grid.canvas ? std::move(m_canvas) : Image(side, side, m_channels);
     result.seams = side == m_grid.canvas ? std::move(m_seams) : Image(side, side, 1);

@@ -53,7 +53,7 @@ Converted convert(const std::vector<std::string>& paths, int size, HeightInputOp
         patches.push_back(extract_patch(load_height_input(paths[i], input_options), PatchOptions{}, &steps[i]));
     QuiltOptions options;
     options.size = size;
-    options.tileable = true, options.min_contrast = 0.5f, options.feather = 2;
+    options.tileable = true, options.min_contrast = 0.9f, options.feather = 2;  // convert's defaults
     const int side = std::min(patches[0].height.width(), patches[0].height.height());
     options.block = std::max(40, side / 8 / 8 * 8);  // --block auto
     c.patch = patches[0];
@@ -203,7 +203,7 @@ TEST(MaterialRealSize, PatchPngPreviewReadsBackInMillimetres) {
 
 TEST(MaterialFlattening, LowReliefIsRescaledByStrengthAutoOrKeptWithSixteenBits) {
     // A veneer-like relief: mean detail tilt about 0.8 degrees.
-    const Image n = sine_normals(160, 12, 0.027);
+    const Image n = sine_normals(160, 12, 0.0425);
     const std::string path = test::scratch_dir() + "/veneer.png";
     write_png(path, encode_normals(n), {{"tdf:mm_per_pixel", "0.1"}}, 16, Quantize::Truncate);
     const HeightInput input = load_height_input(path);
@@ -232,7 +232,7 @@ TEST(MaterialSeams, CutsAndWrapAreNoRougherThanTheInterior) {
     patch.height = synthetic_texture(128, 14);
     patch.mm_per_pixel = 0.1f;
     QuiltOptions options;
-    options.size = 320;
+    options.size = 640;
     options.block = 40;
     options.tileable = true, options.min_contrast = 0.5f, options.feather = 2;
     Image seams;
@@ -301,6 +301,7 @@ TEST(MaterialRegion, BlocksComeOnlyFromTheTexturedRegion) {
     options.size = 240;
     options.block = 32;
     options.tileable = true;
+    options.min_coverage = 1.0f;
     const HeightMap out = quilt_height_maps({patch}, options);
     std::size_t zero = 0;
     for (float v : out.height.values()) zero += v == 0.0f;

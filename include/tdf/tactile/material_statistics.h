@@ -88,7 +88,7 @@ MaterialComparison compare_material(const Image& input, const Image& region, con
 struct MaterialLimits {
     double min_ratio = 0.85, max_ratio = 1.15;  ///< output / region mean detail tilt
     double flat_slack = 0.05;                   ///< output flat fraction - region's
-    double max_distance = 0.15;                 ///< texture_distance
+    double max_distance = 0.25;                 ///< texture_distance
 };
 std::vector<std::string> check_material(const MaterialComparison& c, const MaterialLimits& limits = {});
 
