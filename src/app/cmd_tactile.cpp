@@ -265,7 +265,7 @@ struct NormalArgs {
                      map.mm_per_pixel * float(normals.width()),
                      map.mm_per_pixel * float(normals.height()));
         else
-            log_info("wrote {} ({}x{}, physical size unknown)", path, normals.width(), normals.height());
+            log_info("wrote {} ({}x{}, mm per pixel unknown)", path, normals.width(), normals.height());
         return written;
     }
 };
