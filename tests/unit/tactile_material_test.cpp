@@ -126,6 +126,7 @@ TEST(MaterialStatistics, RegionDropsTheFlatGelAndDistanceSeesTheDifference) {
     EXPECT_LT(whole.tilt_ratio, 0.5);
     EXPECT_GT(whole.flat_excess, 0.5);
     EXPECT_GT(whole.distance, 0.2);
+    RecordProperty("distance_whole_vs_region", std::to_string(whole.distance));
     // The region against itself: equal.
     const Image left = crop(n, 0, 0, 70, 200);
     const MaterialComparison same = compare_material(left, Image(70, 200, 1, 1.0f), left);
@@ -139,6 +140,7 @@ TEST(MaterialStatistics, RegionDropsTheFlatGelAndDistanceSeesTheDifference) {
     const MaterialComparison rotated = compare_material(sine_normals(200, 10, 0.4), Image(), turned);
     EXPECT_GT(rotated.orientation_l1, 1.5);
     EXPECT_GT(rotated.distance, 0.25);
+    RecordProperty("distance_rotated", std::to_string(rotated.distance));
 }
 
 TEST(MaterialStatistics, QuantisationIsWhatTheFileGivesBack) {
