@@ -5,9 +5,13 @@
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
 #include <tdf/tactile/height_input.h>
+#include <tdf/tactile/material_statistics.h>
+#include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/pipeline.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <memory>
 
 #include "commands.h"
@@ -18,7 +22,7 @@ namespace {
 
 struct InputArgs {
     std::string source = "auto", image_kind = "auto";
-    float mm_per_pixel = 0, image_height_mm = 1.0f;
+    float mm_per_pixel = 0, size_mm = 0, image_height_mm = 1.0f;
     bool invert = false;
 
     void add(CLI::App* app) {
@@ -34,8 +38,11 @@ struct InputArgs {
             ->capture_default_str();
         app->add_option("--mm-per-pixel",
                         mm_per_pixel,
-                        "lateral pixel size in mm (0 = from the file: .tmd header or tdf metadata, else "
-                        "GelSight Mini 0.085)")
+                        "lateral pixel size in mm (0 = --size-mm, else the file: .tmd header, tdf metadata, "
+                        ".npz/.npy = GelSight Mini 0.085; else unknown)")
+            ->check(CLI::NonNegativeNumber)
+            ->capture_default_str();
+        app->add_option("--size-mm", size_mm, "physical width of each input in mm (0 = see --mm-per-pixel)")
             ->check(CLI::NonNegativeNumber)
             ->capture_default_str();
         app->add_option(
@@ -53,6 +60,7 @@ struct InputArgs {
                        : image_kind == "normal" ? ImageKind::Normal
                                                 : ImageKind::Auto;
         o.mm_per_pixel = mm_per_pixel;
+        o.size_mm = size_mm;
         o.image_height_mm = image_height_mm;
         o.invert = invert;
         HeightInput input = load_height_input(path, o);
@@ -61,7 +69,7 @@ struct InputArgs {
                     input.kind,
                     input.map.height.width(),
                     input.map.height.height(),
-                    input.map.mm_per_pixel);
+                    input.map.mm_per_pixel > 0 ? fmt::format("{}", input.map.mm_per_pixel) : "unknown");
         return input;
     }
 };
@@ -72,7 +80,7 @@ Toggle toggle(const std::string& value) {
 
 struct PatchArgs {
     PatchOptions options;
-    std::string filter = "auto", smooth = "auto", contact = "auto";
+    std::string filter = "auto", smooth = "auto", contact = "auto", size = "auto";
 
     void add(CLI::App* app) {
         app->add_option("--filter",
@@ -90,7 +98,7 @@ struct PatchArgs {
         app->add_option("--cutoff-mm", options.cutoff_mm, "gaussian filter: cut-off wavelength in mm")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
-        app->add_option("--smooth", smooth, "bilateral filter: auto (on, off for normal-map inputs), on, off")
+        app->add_option("--smooth", smooth, "bilateral filter: auto (on for .npz/.npy captures), on, off")
             ->check(CLI::IsMember({"auto", "on", "off"}))
             ->capture_default_str();
         app->add_option("--bilateral-d", options.bilateral_diameter, "bilateral filter diameter in pixels")
@@ -109,9 +117,11 @@ struct PatchArgs {
                         options.depth_threshold,
                         "contact: raw height above which the sensor touches (mm)")
             ->capture_default_str();
-        app->add_option(
-               "--patch-size", options.size, "patch side after resampling in pixels (0 = keep the crop)")
-            ->check(CLI::NonNegativeNumber)
+        app->add_option("--patch-size",
+                        size,
+                        "patch side after resampling in pixels: auto (256 for captures, else keep the "
+                        "resolution), 0 = keep the crop")
+            ->check(CLI::IsMember({"auto"}) | CLI::NonNegativeNumber)
             ->capture_default_str();
     }
     PatchOptions resolved() const {
@@ -122,24 +132,29 @@ struct PatchArgs {
                                            : HighPass::Auto;
         o.contact = toggle(contact);
         o.smooth = toggle(smooth);
+        o.size = size == "auto" ? -1 : std::stoi(size);
         return o;
     }
 };
 
 struct QuiltArgs {
     QuiltOptions options;
+    std::string block = "40";
     /// `convert` defaults: tileable, min-contrast 0.5 and feather 2 (good maps from any input);
     /// `quilt` defaults to the reference's plain algorithm.
     void add(CLI::App* app, bool convert_defaults) {
         const bool tileable_default = convert_defaults;
         options.tileable = convert_defaults;
-        if (convert_defaults) options.min_contrast = 0.5f, options.feather = 2;
+        if (convert_defaults) options.min_contrast = 0.9f, options.feather = 2, block = "auto";
         app->add_option(
                "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride)")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
-        app->add_option("--block", options.block, "block side in pixels")
-            ->check(CLI::PositiveNumber)
+        app->add_option("--block",
+                        block,
+                        "block side in pixels, or auto (40 below 512 px patches, else 1/8 of the smallest "
+                        "side)")
+            ->check(CLI::IsMember({"auto"}) | CLI::PositiveNumber)
             ->capture_default_str();
         app->add_option("--overlap", options.overlap, "overlap as a fraction of the block, (0, 0.5]")
             ->capture_default_str();
@@ -151,6 +166,11 @@ struct QuiltArgs {
                options.min_contrast,
                "skip candidate blocks with a standard deviation below this fraction of the median (0 = "
                "reference)")
+            ->capture_default_str();
+        app->add_option("--min-coverage",
+                        options.min_coverage,
+                        "use blocks with at least this fraction of their pixels in the textured region")
+            ->check(CLI::Range(0.0f, 1.0f))
             ->capture_default_str();
         app->add_option(
                "--feather", options.feather, "blend across cuts over +-N pixels (0 = hard cut, reference)")
@@ -167,49 +187,97 @@ struct QuiltArgs {
 };
 
 struct NormalArgs {
-    std::string amplitude = "auto";
-    float strength = 1.0f;
-    int bits = 8;
+    std::string amplitude = "auto", strength = "auto", bits = "auto";
     bool exr = false;
     void add(CLI::App* app) {
         app->add_option("--amplitude",
                         amplitude,
-                        "slope scale: auto (reference for step-1 patches, else physical), reference (spec "
-                        "6.4), physical")
+                        "slope scale: auto (reference for step-1 patches of captures, else physical), "
+                        "reference (spec 6.4), physical")
             ->check(CLI::IsMember({"auto", "reference", "physical"}))
             ->capture_default_str();
-        app->add_option("--strength", strength, "extra factor on the slopes")
-            ->check(CLI::PositiveNumber)
+        app->add_option("--strength",
+                        strength,
+                        "factor on the slopes, or auto: 1 when the slopes are known and the textured "
+                        "region's mean detail tilt is >= 2 degrees, else the factor giving 8 degrees")
+            ->check(CLI::IsMember({"auto"}) | CLI::PositiveNumber)
             ->capture_default_str();
-        app->add_option("--bits", bits, "PNG bit depth")
-            ->check(CLI::IsMember({8, 16}))
+        app->add_option("--bits",
+                        bits,
+                        "PNG bit depth: 8, 16, or auto (8, or 16 when 8 bits would lose more than 10 % "
+                        "of the mean detail tilt)")
+            ->check(CLI::IsMember({"auto", "8", "16"}))
             ->capture_default_str();
         app->add_flag("--exr", exr, "also write the float normals as <output>.exr");
     }
-    void write(const std::string& path, const HeightMap& map) const {
-        const Amplitude a = amplitude == "reference"  ? Amplitude::Reference
-                            : amplitude == "physical" ? Amplitude::Physical
-                                                      : Amplitude::Auto;
-        const Image normals = normal_map_from_height(map, a, strength);
-        write_normal_map(path, normals, map.mm_per_pixel, map.source, bits);
-        if (exr && lower_extension(path) != ".exr")
+    Amplitude mode() const {
+        return amplitude == "reference"  ? Amplitude::Reference
+               : amplitude == "physical" ? Amplitude::Physical
+                                         : Amplitude::Auto;
+    }
+    /// The slope factor for maps like `exemplar` (the patch, whose texture mask counts).
+    float resolve_strength(const HeightMap& exemplar) const {
+        if (strength != "auto") return std::stof(strength);
+        const float g = auto_strength(exemplar, mode());
+        if (g != 1.0f)
+            log_info("{}: --strength auto scales the slopes by {:.3g} ({})",
+                     exemplar.source,
+                     g,
+                     slopes_known(exemplar, mode()) ? "low relief" : "pixel size unknown, so slopes unknown");
+        return g;
+    }
+    /// The PNG bit depth for `normals` (decoded floats).
+    int resolve_bits(const Image& normals) const {
+        if (bits != "auto") return std::stoi(bits);
+        const double full = material_statistics(detail_slopes(normals), Image(), 90.0).mean_tilt;
+        const double eight = material_statistics(detail_slopes(quantized_normals(normals, 8)), Image(), 90.0).mean_tilt;
+        const bool sixteen = full > 0 && std::abs(eight - full) > 0.1 * full;
+        if (sixteen) log_info("8 bits would change the mean detail tilt from {:.2f} to {:.2f} degrees: writing 16 bits", full, eight);
+        return sixteen ? 16 : 8;
+    }
+    struct Written {
+        Image normals;  ///< as a reader of the file decodes them
+        int bits = 8;
+    };
+    Written write(const std::string& path, const HeightMap& map, float slope_factor,
+                  const ImageMetadata& extra = {}) const {
+        const Image normals = normal_map_from_height(map, mode(), slope_factor);
+        Written written;
+        const bool png = lower_extension(path) != ".exr";
+        written.bits = png ? resolve_bits(normals) : 32;
+        written.normals = png ? quantized_normals(normals, written.bits) : normals;
+        ImageMetadata metadata = extra;
+        metadata["tdf:strength"] = fmt::format("{}", slope_factor);
+        write_normal_map(path, normals, map.mm_per_pixel, map.source, png ? written.bits : 8, metadata);
+        if (exr && png)
             write_normal_map(std::filesystem::path(path).replace_extension(".exr").string(),
                              normals,
                              map.mm_per_pixel,
-                             map.source);
-        log_info("wrote {} ({}x{}, {} mm per pixel, {} x {} mm)",
-                 path,
-                 normals.width(),
-                 normals.height(),
-                 map.mm_per_pixel,
-                 map.mm_per_pixel * float(normals.width()),
-                 map.mm_per_pixel * float(normals.height()));
+                             map.source,
+                             8,
+                             metadata);
+        if (map.mm_per_pixel > 0)
+            log_info("wrote {} ({}x{}, {} mm per pixel, {} x {} mm)",
+                     path,
+                     normals.width(),
+                     normals.height(),
+                     map.mm_per_pixel,
+                     map.mm_per_pixel * float(normals.width()),
+                     map.mm_per_pixel * float(normals.height()));
+        else
+            log_info("wrote {} ({}x{}, mm per pixel unknown)", path, normals.width(), normals.height());
+        return written;
     }
 };
 
-void require_exr(const std::string& path, const char* what) {
-    if (lower_extension(path) != ".exr")
-        throw_error("{}: {} are written as float EXR; use an .exr output name", path, what);
+/// A height map as EXR (mm) or, for a .png name, a 16-bit preview that reads back in mm.
+void write_heights(const std::string& path, const HeightMap& map) {
+    if (lower_extension(path) == ".png")
+        write_height_preview_png(path, map);
+    else if (lower_extension(path) == ".exr")
+        write_height_map(path, map);
+    else
+        throw_error("{}: height maps are written as float EXR (or a 16-bit PNG preview): use .exr or .png", path);
 }
 
 void log_quilt(const QuiltStats& s, const HeightMap& map) {
@@ -221,13 +289,28 @@ void log_quilt(const QuiltStats& s, const HeightMap& map) {
     log_verbose("quilted map: {}x{}", map.height.width(), map.height.height());
 }
 
+// `--block auto`: 40 px (the reference's example) for patches under 512 px, else an eighth of
+// the smallest side (a multiple of 8): large maps keep their resolution and their features
+// fit in a block, with few FFT searches over the large exemplar.
+QuiltOptions resolve_block(QuiltOptions options, const std::string& block, const std::vector<HeightMap>& patches) {
+    if (block != "auto") {
+        options.block = std::stoi(block);
+        return options;
+    }
+    int side = std::numeric_limits<int>::max();
+    for (const HeightMap& p : patches) side = std::min({side, p.height.width(), p.height.height()});
+    options.block = std::max(40, side / 8 / 8 * 8);
+    if (options.block != 40) log_info("quilting with {} px blocks (--block auto)", options.block);
+    return options;
+}
+
 // Options of every step; each step reads the ones it registered.
 struct State {
     InputArgs input;
     PatchArgs patch;
     QuiltArgs quilt, convert_quilt;
     NormalArgs normal;
-    std::string in, out, steps_dir;
+    std::string in, out, steps_dir, region_quilt = "off";
     std::vector<std::string> inputs;
     bool no_quilt = false;
     CLI::App *height = nullptr, *patch_cmd = nullptr, *quilt_cmd = nullptr, *normal_cmd = nullptr,
@@ -235,41 +318,43 @@ struct State {
 };
 
 void run_height(const State& s) {
-    require_exr(s.out, "height maps");
     const HeightInput input = s.input.load(s.in);
-    write_height_map(s.out, input.map);
-    log_info("wrote {} ({}, {}x{}, {} mm per pixel)",
-             s.out,
-             input.kind,
-             input.map.height.width(),
-             input.map.height.height(),
-             input.map.mm_per_pixel);
+    write_heights(s.out, input.map);
+    log_info("wrote {} ({}, {}x{})", s.out, input.kind, input.map.height.width(), input.map.height.height());
 }
 
 void run_patch(const State& s) {
-    require_exr(s.out, "height patches");
     const HeightMap patch = extract_patch(s.input.load(s.in), s.patch.resolved());
-    write_height_map(s.out, patch);
-    log_info("wrote {} ({}x{}, {} mm per pixel, height range {} mm)",
+    write_heights(s.out, patch);
+    log_info("wrote {} ({}x{}, textured region {:.1f} %, height range {} mm)",
              s.out,
              patch.height.width(),
              patch.height.height(),
-             patch.mm_per_pixel,
+             100.0 * mask_fraction(patch.texture_mask),
              patch.reference_scale_mm);
 }
 
 void run_quilt(const State& s) {
-    require_exr(s.out, "quilted height maps");
     std::vector<HeightMap> patches;
-    for (const std::string& path : s.inputs) patches.push_back(s.input.load(path).map);
+    for (const std::string& path : s.inputs) {
+        patches.push_back(s.input.load(path).map);
+        if (s.region_quilt == "on") {  // the patch file carries no mask: find it again
+            HeightMap& p = patches.back();
+            p.texture_mask = texture_region(detail_slopes(normal_map_from_height(p)).tilt);
+        }
+    }
     QuiltStats stats;
-    const HeightMap quilted = quilt_height_maps(patches, s.quilt.options, &stats);
-    write_height_map(s.out, quilted);
+    const HeightMap quilted =
+        quilt_height_maps(patches, resolve_block(s.quilt.options, s.quilt.block, patches), &stats);
+    write_heights(s.out, quilted);
     log_quilt(stats, quilted);
     log_info("wrote {} ({}x{})", s.out, quilted.height.width(), quilted.height.height());
 }
 
-void run_normal(const State& s) { s.normal.write(s.out, s.input.load(s.in).map); }
+void run_normal(const State& s) {
+    const HeightMap map = s.input.load(s.in).map;
+    s.normal.write(s.out, map, s.normal.resolve_strength(map));
+}
 
 void run_convert(const State& s) {
     if (s.no_quilt && s.inputs.size() > 1)
@@ -279,33 +364,79 @@ void run_convert(const State& s) {
     if (steps) ensure_folder(s.steps_dir);
     auto step_path = [&](const std::string& name) { return s.steps_dir + "/" + name; };
     std::vector<HeightMap> patches;
+    std::vector<PatchSteps> figures(s.inputs.size());
     for (std::size_t i = 0; i < s.inputs.size(); ++i) {
-        PatchSteps figures;
-        patches.push_back(
-            extract_patch(s.input.load(s.inputs[i]), patch_options, steps ? &figures : nullptr));
+        patches.push_back(extract_patch(s.input.load(s.inputs[i]), patch_options, &figures[i]));
+        log_info("{}: textured region {:.1f} % of the input ({}), {:.1f} % of the patch",
+                 s.inputs[i],
+                 100.0 * mask_fraction(figures[i].region),
+                 figures[i].contact_mask.empty() ? "local detail tilt" : "contact mask",
+                 100.0 * mask_fraction(patches.back().texture_mask));
         if (!steps) continue;
         const std::string prefix = s.inputs.size() > 1 ? fmt::format("input{}_", i) : "";
-        write_height_preview(step_path(prefix + "1_raw_height.png"), figures.raw);
-        if (!figures.contact_mask.empty())
-            write_png(step_path(prefix + "2_contact_mask.png"), figures.contact_mask);
-        write_height_preview(step_path(prefix + "3_high_pass.png"), figures.high_passed);
-        if (!figures.smoothed.empty())
-            write_height_preview(step_path(prefix + "4_smoothed.png"), figures.smoothed);
-        write_height_preview(step_path(prefix + "5_patch.png"), figures.patch);
+        const PatchSteps& f = figures[i];
+        write_height_preview(step_path(prefix + "1_raw_height.png"), f.raw);
+        write_png(step_path(prefix + "2_region.png"), f.region);
+        if (!f.contact_mask.empty()) write_png(step_path(prefix + "2_contact_mask.png"), f.contact_mask);
+        write_height_preview(step_path(prefix + "3_high_pass.png"), f.high_passed);
+        if (!f.smoothed.empty()) write_height_preview(step_path(prefix + "4_smoothed.png"), f.smoothed);
+        write_height_preview(step_path(prefix + "5_patch.png"), f.patch);
     }
     HeightMap result = patches[0];
     if (!s.no_quilt) {
         QuiltStats stats;
-        result = quilt_height_maps(patches, s.convert_quilt.options, &stats);
+        result = quilt_height_maps(
+            patches, resolve_block(s.convert_quilt.options, s.convert_quilt.block, patches), &stats);
         log_quilt(stats, result);
         if (steps) write_height_preview(step_path("6_quilted.png"), result.height);
     }
-    s.normal.write(s.out, result);
+    const float strength = s.normal.resolve_strength(patches[0]);
+
+    // What the output keeps of each input's material (README "tdf tactile": statistics).
+    const Image output = normal_map_from_height(result, s.normal.mode(), strength);
+    const bool png = lower_extension(s.out) != ".exr";
+    const int bits = png ? s.normal.resolve_bits(output) : 32;
+    const Image decoded = png ? quantized_normals(output, bits) : output;
+    std::vector<std::string> reports;
+    for (std::size_t i = 0; i < s.inputs.size(); ++i) {
+        const MaterialComparison c =
+            compare_material(scale_normal_slopes(figures[i].input_normals, strength), figures[i].region, decoded);
+        log_info("{}: input region {:.1f} %: mean detail tilt {:.2f} deg, {:.1f} % flat; output {:.2f} deg "
+                 "({:.0f} %), {:.1f} % flat; texture distance {:.3f}",
+                 s.inputs[i],
+                 100.0 * c.region.fraction,
+                 c.region.mean_tilt,
+                 100.0 * c.region.flat_fraction,
+                 c.output.mean_tilt,
+                 100.0 * c.tilt_ratio,
+                 100.0 * c.output.flat_fraction,
+                 c.distance);
+        MaterialLimits warn;  // "much" flatter or less similar: the yardstick's limits
+        warn.min_ratio = 0.75, warn.max_ratio = 1.35;
+        for (const std::string& problem : check_material(c, warn))
+            log_warning("{}: the output is {}", s.inputs[i], problem);
+        reports.push_back(c.json());
+    }
+    for (std::size_t i = 0; i < s.inputs.size() && steps; ++i) {  // the input the numbers describe
+        const std::string prefix = s.inputs.size() > 1 ? fmt::format("input{}_", i) : "";
+        write_normal_map(step_path(prefix + "0_input_normal.png"),
+                         scale_normal_slopes(figures[i].input_normals, strength),
+                         patches[i].mm_per_pixel,
+                         s.inputs[i],
+                         png ? bits : 16);
+    }
+    const std::string material =
+        reports.size() == 1 ? reports[0] : fmt::format("[{}]", fmt::join(reports, ", "));
+    ImageMetadata metadata{{"tdf:material", material}};
+    NormalArgs normal = s.normal;
+    normal.bits = png ? std::to_string(bits) : normal.bits;
+    normal.write(s.out, result, strength, metadata);
     if (steps) {  // an 8-bit PNG for viewing, whatever the output's format
         NormalArgs preview = s.normal;
-        preview.bits = 8;
+        preview.bits = "8";
         preview.exr = false;
-        preview.write(step_path("7_normal_map.png"), result);
+        preview.write(step_path("7_normal_map.png"), result, strength, metadata);
+        write_text_atomically(step_path("8_statistics.json"), material + "\n");
     }
 }
 
@@ -322,13 +453,14 @@ Command register_tactile(CLI::App& root) {
         app->add_subcommand("height", "any input -> float height map in mm (EXR with mm-per-pixel metadata)");
     s->height->add_option("input", s->in, ".npz/.npy capture, .tmd, height image or normal-map image")
         ->required();
-    s->height->add_option("-o,--output", s->out, "output .exr")->required();
+    s->height->add_option("-o,--output", s->out, "output .exr or .png (16-bit preview)")->required();
     s->input.add(s->height);
 
     s->patch_cmd = app->add_subcommand(
         "patch", "height patch: high-pass, smoothing, contact crop, resampling (spec 6.2)");
     s->patch_cmd->add_option("input", s->in, "any input of `tactile height`")->required();
-    s->patch_cmd->add_option("-o,--output", s->out, "output .exr (mm, with metadata)")->required();
+    s->patch_cmd->add_option("-o,--output", s->out, "output .exr (mm, with metadata) or .png (16-bit preview)")
+        ->required();
     s->input.add(s->patch_cmd);
     s->patch.add(s->patch_cmd);
 
@@ -336,7 +468,14 @@ Command register_tactile(CLI::App& root) {
     s->quilt_cmd
         ->add_option("patches", s->inputs, "height maps (.exr from `tactile patch`, or height images)")
         ->required();
-    s->quilt_cmd->add_option("-o,--output", s->out, "output .exr")->required();
+    s->quilt_cmd->add_option("-o,--output", s->out, "output .exr or .png (16-bit preview)")->required();
+    s->quilt_cmd
+        ->add_option("--region",
+                     s->region_quilt,
+                     "on: draw blocks only from each patch's textured region (as convert does); off: the "
+                     "reference")
+        ->check(CLI::IsMember({"on", "off"}))
+        ->capture_default_str();
     s->input.add(s->quilt_cmd);
     s->quilt.add(s->quilt_cmd, false);
 

@@ -10,6 +10,7 @@
 #include <tdf/tactile/tmd_reader.h>
 
 #include <cmath>
+#include <cstdlib>
 
 namespace tdf {
 
@@ -75,6 +76,15 @@ bool is_grey(const Image& image) {
     return true;
 }
 
+float metadata_number(const ImageMetadata& metadata, const char* key, const std::string& path) {
+    const std::string& text = metadata.at(key);
+    char* end = nullptr;
+    const float value = std::strtof(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0' || !std::isfinite(value))
+        throw_error("{}: metadata '{}' = '{}' is not a number", path, key, text);
+    return value;
+}
+
 HeightInput load_image(const std::string& path, const HeightInputOptions& options) {
     ImageMetadata metadata;
     const Image image = read_image(path, metadata);
@@ -87,14 +97,21 @@ HeightInput load_image(const std::string& path, const HeightInputOptions& option
     const bool exr = lower_extension(path) == ".exr";
     if (kind == ImageKind::Height) {
         input.map.height = image.channels() == 1 ? image : image.channel_range(0, 1);
-        if (!exr)
+        if (metadata.count(kMetaHeightMin) && metadata.count(kMetaHeightMax)) {  // ours: restore mm
+            const float lo = metadata_number(metadata, kMetaHeightMin, path);
+            const float range = metadata_number(metadata, kMetaHeightMax, path) - lo;
+            for (float& v : input.map.height.values()) v = lo + v * range;
+        } else if (!exr) {
             for (float& v : input.map.height.values()) v *= options.image_height_mm;
+        }
+        apply_height_metadata(metadata, input.map);
         input.kind = "height image";
     } else {
         const TactileMap normals = decode_tactile_map(image, metadata, path);
         input.map.height = height_from_normals(normals.normals, 0.1f, path);
         input.kind = "normal map";
         input.from_normals = true;
+        input.normals = normals.normals;
         // Integrated heights are in pixel widths; mm need the pixel size (set below).
         input.map.reference_scale_mm = 0;
     }
@@ -119,17 +136,19 @@ HeightInput load_height_input(const std::string& path, const HeightInputOptions&
     } else {
         input = load_image(path, options);
     }
+    if (options.size_mm > 0) input.map.mm_per_pixel = options.size_mm / float(input.map.height.width());
     if (options.mm_per_pixel > 0) input.map.mm_per_pixel = options.mm_per_pixel;
-    if (input.map.mm_per_pixel <= 0) {
-        input.map.mm_per_pixel = kGelSightMiniMmPerPixel;
-        log_info(
-            "{}: no pixel size in the file; assuming a GelSight Mini ({} mm per pixel, --mm-per-pixel to "
-            "change)",
-            path,
-            kGelSightMiniMmPerPixel);
+    if (input.map.mm_per_pixel <= 0 && !input.map.pixel_heights)
+        log_warning(
+            "{}: physical size unknown (no sensor metadata); recorded as unknown: give --size-mm (width "
+            "in mm) or --mm-per-pixel for a texture at its real size",
+            path);
+    if (input.from_normals) {
+        if (input.map.mm_per_pixel > 0)
+            for (float& v : input.map.height.values()) v *= input.map.mm_per_pixel;
+        else
+            input.map.pixel_heights = true;  // slopes stay true without a size
     }
-    if (input.from_normals)
-        for (float& v : input.map.height.values()) v *= input.map.mm_per_pixel;
     if (options.invert)
         for (float& v : input.map.height.values()) v = -v;
     input.map.source = path;

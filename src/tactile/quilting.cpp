@@ -9,6 +9,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <utility>
 
 #include "fftw_plan_impl.h"
 
@@ -90,6 +91,7 @@ struct Scratch {
     std::vector<float> strip_cost;       // B x O, one side's cost along its seam
     std::vector<float> weight, blurred;  // B x B, weight of the new block (feathering)
     std::vector<int> seam;
+    std::vector<std::pair<int, int>> seam_pixels;  // block-local (x, y) on this block's cuts
 };
 
 class ScratchPool {
@@ -151,7 +153,7 @@ void min_cut_path(const float* cost, int rows, int cols, std::vector<double>& to
 class Quilter {
 public:
     Quilter(const std::vector<Image>& images, const QuiltOptions& options,
-            const std::vector<std::string>& names);
+            const std::vector<std::string>& names, const std::vector<Image>& masks);
     QuiltResult run();
 
 private:
@@ -169,14 +171,15 @@ private:
     std::vector<Exemplar> m_exemplars;
     std::vector<std::vector<std::uint8_t>> m_masks;  // per side set
     std::vector<std::size_t> m_mask_count;
-    Image m_canvas;
+    std::vector<Image> m_regions;  // per exemplar, empty = all
+    Image m_canvas, m_seams;
     std::vector<std::uint8_t> m_filled;
     int m_channels = 0;
 };
 
 Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options,
-                 const std::vector<std::string>& names)
-    : m_options(options) {
+                 const std::vector<std::string>& names, const std::vector<Image>& masks)
+    : m_options(options), m_regions(masks) {
     auto name = [&](std::size_t i) { return i < names.size() ? names[i] : fmt::format("exemplar {}", i); };
     if (images.empty()) throw_error("quilting: no exemplar patch given");
     if (options.block < 4) throw_error("quilting: --block must be at least 4 pixels, got {}", options.block);
@@ -184,6 +187,14 @@ Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options,
         throw_error("quilting: --overlap must be in (0, 0.5], got {}", options.overlap);
     if (!(options.tolerance >= 0.0f))
         throw_error("quilting: --tolerance must be >= 0, got {}", options.tolerance);
+    if (!(options.min_coverage >= 0.0f && options.min_coverage <= 1.0f))
+        throw_error("quilting: the minimum region coverage must be in [0, 1], got {}", options.min_coverage);
+    if (!masks.empty() && masks.size() != images.size())
+        throw_error("quilting: {} region masks for {} exemplars", masks.size(), images.size());
+    for (std::size_t i = 0; i < masks.size(); ++i)
+        if (!masks[i].empty() && (masks[i].width() != images[i].width() ||
+                                  masks[i].height() != images[i].height() || masks[i].channels() != 1))
+            throw_error("{}: the region mask does not match the exemplar's size", name(i));
     if (!(options.min_contrast >= 0.0f && options.min_contrast <= 1.0f))
         throw_error("quilting: --min-contrast must be in [0, 1], got {}", options.min_contrast);
     if (options.feather < 0 || 2 * options.feather >= options.block)
@@ -224,8 +235,9 @@ Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options,
     exclude_flat_candidates();
 }
 
-// Standard deviation of every candidate block (all channels), from summed-area tables.
-std::vector<double> block_contrast(const Image& image, int block) {
+// Standard deviation of every candidate block (all channels), from summed-area tables; with
+// `mean`, the block's mean instead (the coverage of a 0/1 mask).
+std::vector<double> block_contrast(const Image& image, int block, bool want_mean) {
     const int w = image.width(), h = image.height(), channels = image.channels();
     std::vector<double> sum(std::size_t(w + 1) * std::size_t(h + 1), 0.0), sum2(sum.size(), 0.0);
     auto at = [&](int x, int y) { return std::size_t(y) * std::size_t(w + 1) + std::size_t(x); };
@@ -247,26 +259,45 @@ std::vector<double> block_contrast(const Image& image, int block) {
             };
             const double mean = box(sum) / n;
             contrast[std::size_t(y) * std::size_t(px) + std::size_t(x)] =
-                std::sqrt(std::max(box(sum2) / n - mean * mean, 0.0));
+                want_mean ? mean : std::sqrt(std::max(box(sum2) / n - mean * mean, 0.0));
         }
     return contrast;
 }
 
 void Quilter::exclude_flat_candidates() {
-    std::vector<std::vector<double>> contrast;
+    // Blocks outside the textured region first: the guard below compares with the median of
+    // the region's blocks, not with the flat gel around a contact.
+    std::vector<std::vector<double>> coverage;
     std::vector<double> all;
-    for (const Exemplar& e : m_exemplars) {
-        contrast.push_back(block_contrast(*e.image, m_grid.block));
-        all.insert(all.end(), contrast.back().begin(), contrast.back().end());
+    for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
+        const Exemplar& e = m_exemplars[i];
+        const bool masked = i < m_regions.size() && !m_regions[i].empty();
+        coverage.push_back(masked ? block_contrast(m_regions[i], m_grid.block, true)
+                                  : std::vector<double>(e.candidates(), 1.0));
+        all.insert(all.end(), coverage.back().begin(), coverage.back().end());
+    }
+    const std::size_t keep = std::min(all.size(), std::max<std::size_t>(64, all.size() / 50));
+    std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(keep - 1), all.end(), std::greater<double>());
+    const double needed = std::min(double(m_options.min_coverage), all[keep - 1]);
+    for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
+        m_exemplars[i].excluded.resize(coverage[i].size());
+        for (std::size_t k = 0; k < coverage[i].size(); ++k)
+            m_exemplars[i].excluded[k] = coverage[i][k] < needed - 1e-9;
+    }
+
+    std::vector<std::vector<double>> contrast;
+    all.clear();
+    for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
+        contrast.push_back(block_contrast(*m_exemplars[i].image, m_grid.block, false));
+        for (std::size_t k = 0; k < contrast[i].size(); ++k)
+            if (!m_exemplars[i].excluded[k]) all.push_back(contrast[i][k]);
     }
     std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() / 2), all.end());
     const double threshold = double(m_options.min_contrast) * all[all.size() / 2];
-    for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
-        m_exemplars[i].excluded.resize(contrast[i].size());
+    for (std::size_t i = 0; i < m_exemplars.size(); ++i)
         // Strictly below: with min_contrast <= 1 at least half of the candidates stay.
         for (std::size_t k = 0; k < contrast[i].size(); ++k)
-            m_exemplars[i].excluded[k] = contrast[i][k] < threshold;
-    }
+            if (contrast[i][k] < threshold) m_exemplars[i].excluded[k] = 1;
 }
 
 void Quilter::prepare_exemplar(Exemplar& e, const Image& image) {
@@ -444,6 +475,7 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
             s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)] = d2 / float(m_channels);
         }
     std::fill(s.keep_old.begin(), s.keep_old.end(), 0);
+    s.seam_pixels.clear();
     double seam_sum = 0;
     std::size_t seam_pixels = 0;
     // Each side: a path across its strip, the placed content kept on the outer side of it.
@@ -463,6 +495,7 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
         min_cut_path(cost.data(), b, o, s.path_cost, s.seam);
         for (int r = 0; r < b; ++r) {
             const int cut = s.seam[std::size_t(r)];
+            s.seam_pixels.push_back(vertical ? std::pair<int, int>{offset + cut, r} : std::pair<int, int>{r, offset + cut});
             seam_sum += cost[std::size_t(r) * std::size_t(o) + std::size_t(cut)];
             ++seam_pixels;
             // Left/top: pixels before the cut stay; right/bottom: pixels after it stay.
@@ -488,7 +521,9 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
                 out = placed[i] && w < 1.0f ? out + w * (fresh - out) : fresh;
             }
             m_filled[std::size_t(cy) * std::size_t(m_grid.canvas) + std::size_t(cx)] = 1;
+            if (w == 1.0f) m_seams.at(cx, cy, 0) = 0.0f;  // covered by new content
         }
+    for (const auto& [x, y] : s.seam_pixels) m_seams.at(m_grid.at(ox, x), m_grid.at(oy, y), 0) = 1.0f;
 }
 
 void Quilter::new_block_weights(unsigned sides, Scratch& s) const {
@@ -526,6 +561,7 @@ void Quilter::place_block(int row, int col, Scratch& s, double& cut_error, doubl
 QuiltResult Quilter::run() {
     const int n = m_grid.n;
     m_canvas = Image(m_grid.canvas, m_grid.canvas, m_channels);
+    m_seams = Image(m_grid.canvas, m_grid.canvas, 1);
     m_filled.assign(std::size_t(m_grid.canvas) * std::size_t(m_grid.canvas), 0);
 
     // Dependency levels: a block comes after every earlier (raster-order) block it overlaps.
@@ -590,13 +626,31 @@ QuiltResult Quilter::run() {
     const double placed = double(std::max<std::size_t>(level.size() - 1, 1));
     result.stats.mean_cut_error = cut_sum / placed;
     result.stats.mean_random_error = random_sum / placed;
+    if (m_grid.wrap) {
+        // The canvas is periodic, so any origin tiles alike. Boundary cuts gather at the edges of
+        // the overlap strips (line pairs at a multiple of the stride carry ~1.3x the mean step);
+        // starting half a stride later puts the wrap-around between two ordinary lines.
+        const int shift = m_grid.stride / 2, w = m_grid.canvas;
+        Image rolled(w, w, m_channels), seams(w, w, 1);
+        for (int y = 0; y < w; ++y)
+            for (int x = 0; x < w; ++x) {
+                const int sx = (x + shift) % w, sy = (y + shift) % w;
+                std::copy(m_canvas.pixel(sx, sy), m_canvas.pixel(sx, sy) + m_channels, rolled.pixel(x, y));
+                seams.at(x, y, 0) = m_seams.at(sx, sy, 0);
+            }
+        m_canvas = std::move(rolled);
+        m_seams = std::move(seams);
+    }
     const int side = quilt_output_side(m_options);
     result.image = side == m_grid.canvas ? std::move(m_canvas) : Image(side, side, m_channels);
+    result.seams = side == m_grid.canvas ? std::move(m_seams) : Image(side, side, 1);
     if (result.image.width() != m_grid.canvas)
-        for (int y = 0; y < side; ++y)
+        for (int y = 0; y < side; ++y) {
             std::copy(m_canvas.pixel(0, y),
                       m_canvas.pixel(0, y) + std::size_t(side) * std::size_t(m_channels),
                       result.image.pixel(0, y));
+            std::copy(m_seams.pixel(0, y), m_seams.pixel(0, y) + std::size_t(side), result.seams.pixel(0, y));
+        }
     return result;
 }
 
@@ -612,8 +666,8 @@ int quilt_output_side(const QuiltOptions& options) {
 }
 
 QuiltResult quilt(const std::vector<Image>& exemplars, const QuiltOptions& options,
-                  const std::vector<std::string>& names) {
-    Quilter quilter(exemplars, options, names);
+                  const std::vector<std::string>& names, const std::vector<Image>& masks) {
+    Quilter quilter(exemplars, options, names, masks);
     return quilter.run();
 }
 

@@ -1,5 +1,6 @@
 // End-to-end runs of the `tdf tactile` steps through the built binary.
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 #include <tdf/io/image_io.h>
 #include <tdf/tactile/tactile_map.h>
 
@@ -61,9 +62,11 @@ TEST(TactileCli, StepsChainFromCaptureToNormalMap) {
         ASSERT_NEAR(exr.normals.values()[i], map.normals.values()[i], 2.0f / 65535.0f + 1e-6f);
 
     run = run_tdf("tactile convert " + capture + " -o " + dir + "/convert.png --size 120 --steps-png " + dir +
-                  "/steps -q");
+                  "/steps");
     ASSERT_EQ(run.status, 0) << run.output;
-    for (const char* step : {"1_raw_height",
+    for (const char* step : {"0_input_normal",
+                             "1_raw_height",
+                             "2_region",
                              "2_contact_mask",
                              "3_high_pass",
                              "4_smoothed",
@@ -71,6 +74,42 @@ TEST(TactileCli, StepsChainFromCaptureToNormalMap) {
                              "6_quilted",
                              "7_normal_map"})
         EXPECT_TRUE(std::filesystem::exists(dir + "/steps/" + step + ".png")) << step;
+    // The material statistics: printed, in the metadata and beside the step PNGs.
+    EXPECT_NE(run.output.find("mean detail tilt"), std::string::npos) << run.output;
+    EXPECT_TRUE(std::filesystem::exists(dir + "/steps/8_statistics.json"));
+    ImageMetadata metadata;
+    read_image(dir + "/convert.png", metadata);
+    ASSERT_TRUE(metadata.count("tdf:material"));
+    EXPECT_NE(metadata.at("tdf:material").find("\"tilt_ratio\""), std::string::npos);
+
+    // Height steps also write PNG previews that read back in mm (issue 16).
+    run = run_tdf("tactile patch " + capture + " -o " + dir + "/patch.png -q");
+    ASSERT_EQ(run.status, 0) << run.output;
+    run = run_tdf("tactile quilt " + dir + "/patch.png -o " + dir + "/quilt_from_png.exr --size 120 -q");
+    ASSERT_EQ(run.status, 0) << run.output;
+    run = run_tdf("tactile patch " + capture + " -o " + dir + "/patch.tif -q");
+    EXPECT_EQ(run.status, 1) << run.output;
+}
+
+TEST(TactileCli, UnknownSizeGivesOneWarning) {
+    TDF_REQUIRE_TDF_BINARY();
+    TDF_REQUIRE_SHARED_DATA("tactile/texture_samples/Potato_00000.png");
+    const std::string sample = test::shared_data_dir() + "/tactile/texture_samples/Potato_00000.png";
+    const std::string out = test::scratch_dir() + "/potato_normal.png";
+    CliRun run = run_tdf("tactile convert " + sample + " -o " + out + " --size 120");
+    ASSERT_EQ(run.status, 0) << run.output;
+    std::size_t warnings = 0;
+    for (std::size_t at = run.output.find("physical size unknown"); at != std::string::npos;
+         at = run.output.find("physical size unknown", at + 1))
+        ++warnings;
+    EXPECT_EQ(warnings, 1u) << run.output;
+    ImageMetadata metadata;
+    read_image(out, metadata);
+    EXPECT_EQ(metadata.at("tdf:mm_per_pixel"), "unknown");
+    run = run_tdf("tactile convert " + sample + " -o " + out + " --size 120 --size-mm 20 -q");
+    ASSERT_EQ(run.status, 0) << run.output;
+    read_image(out, metadata);
+    EXPECT_EQ(metadata.at("tdf:mm_per_pixel"), fmt::format("{}", 20.0f / 240.0f));
 }
 
 TEST(TactileCli, BadInputFailsWithOneLineNamingTheFile) {

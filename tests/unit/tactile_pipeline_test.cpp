@@ -214,7 +214,7 @@ TEST(Pipeline, AllNineTextureSamplesConvert) {
         ASSERT_TRUE(normals.all_finite()) << path;
         const std::string out = test::scratch_dir() + "/" + entry.path().stem().string() + "_normal.png";
         write_normal_map(out, normals, quilted.mm_per_pixel, path);
-        EXPECT_FLOAT_EQ(load_tactile_map(out).mm_per_pixel, kGelSightMiniMmPerPixel);
+        EXPECT_FLOAT_EQ(load_tactile_map(out).mm_per_pixel, 0.0f) << "no size in the file: unknown";
 
         // Without filtering, integrating the sample and differentiating again gives back its
         // normals: the Poisson step loses only the non-integrable part.

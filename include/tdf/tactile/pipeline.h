@@ -37,25 +37,35 @@ struct PatchOptions {
     float sigma_space = 125.0f;     ///< pixels
     Toggle contact = Toggle::Auto;  ///< contact crop; Auto: on for raw captures (.npz/.npy) only
     float depth_threshold = 0.5f;   ///< mm, on the raw (possibly inverted) heights
-    int size = 256;                 ///< output side in pixels after resampling; 0 = keep the crop
+    /// Output side in pixels after resampling; 0 = keep the crop; -1 (auto) = 256 for captures
+    /// (the reference), keep the resolution of every other input.
+    int size = -1;
 };
 
 /// Intermediate images of step 1 for the step figures (empty when a step is skipped).
 struct PatchSteps {
     Image raw, contact_mask, high_passed, smoothed, patch;
+    /// The input's textured region (1 channel, the input's size): the contact mask of a
+    /// capture, else texture_region of the input's detail tilt.
+    Image region;
+    /// The input's normals at the amplitude its patch gets at strength 1 (for statistics).
+    Image input_normals;
 };
 
-/// Step 1: high-pass, smoothing, contact crop (a centred square when the crop is off),
-/// resampling. The result is in mm with minimum 0; mm_per_pixel follows the resampling and
-/// reference_scale_mm is the crop's height range (spec 6.2 step 6), except for integrated
-/// normal maps, whose slopes are already true (0: physical amplitude). Throws tdf::Error
+/// Step 1: finds the textured region, high-pass, smoothing, contact crop (captures; other
+/// inputs keep their whole extent), resampling. The result is in mm (or pixel widths, see
+/// HeightMap::pixel_heights) with minimum 0; mm_per_pixel follows the resampling;
+/// texture_mask is the region inside the patch. reference_scale_mm is the crop's height range
+/// (spec 6.2 step 6) for captures (.npz/.npy), else 0 (physical amplitude). Throws tdf::Error
 /// (naming the input) for an empty contact mask or a flat patch (range <= 1e-6 mm).
 HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, PatchSteps* steps = nullptr);
 
-/// Step 2: quilts height maps (mm, equal mm_per_pixel within 1%) into one; keeps their pixel
-/// size and the largest reference_scale_mm. Throws tdf::Error naming mismatching inputs.
+/// Step 2: quilts height maps (mm, equal mm_per_pixel within 1%) into one, drawing blocks from
+/// their texture masks; keeps their pixel size and the largest reference_scale_mm; the result
+/// is tileable when the options are. `seams` (optional) receives QuiltResult::seams. Throws
+/// tdf::Error naming mismatching inputs.
 HeightMap quilt_height_maps(const std::vector<HeightMap>& patches, const QuiltOptions& options,
-                            QuiltStats* stats = nullptr);
+                            QuiltStats* stats = nullptr, Image* seams = nullptr);
 
 enum class Amplitude {
     Auto,       ///< Reference when the map has a reference_scale_mm, else Physical
@@ -64,15 +74,33 @@ enum class Amplitude {
 };
 
 /// Step 3: decoded normals (3 channels, OpenGL) of a height map; `strength` multiplies the
-/// slopes on top of the amplitude rule.
+/// slopes on top of the amplitude rule. Physical amplitude takes heights in pixel widths when
+/// HeightMap::pixel_heights, and 1 mm per pixel when the pixel size is unknown (then the
+/// slopes are not known: see auto_strength). Tileable maps get periodic differences.
 Image normal_map_from_height(const HeightMap& map, Amplitude amplitude = Amplitude::Auto,
                              float strength = 1.0f);
 
+/// True when the slopes of `map` under `amplitude` are known: the reference rule, heights in
+/// pixel widths, or a known pixel size.
+bool slopes_known(const HeightMap& map, Amplitude amplitude);
+
+/// `--strength auto`: 1 when the slopes are known and the mean detail tilt (material_statistics)
+/// of the map's textured region is at least kAutoStrengthMinTilt degrees; otherwise the factor
+/// that makes it kAutoStrengthTilt degrees (a height image of unknown size, a veneer's 0.8
+/// degree relief, which an 8-bit map would flatten).
+constexpr double kAutoStrengthMinTilt = 2.0;
+constexpr double kAutoStrengthTilt = 8.0;
+float auto_strength(const HeightMap& map, Amplitude amplitude);
+
 /// Writes decoded normals as a PNG (8 or 16 bits, reference encoding, spec 6.4 step 5) or,
 /// for an .exr path, as float decoded normals; `mm_per_pixel` (when > 0) and `source` are
-/// stored as metadata (tdf:mm_per_pixel, tdf:source).
+/// stored as metadata (tdf:mm_per_pixel, "unknown" when 0; tdf:source), plus `extra`.
 void write_normal_map(const std::string& path, const Image& normals, float mm_per_pixel,
-                      const std::string& source, int bits = 8);
+                      const std::string& source, int bits = 8, const ImageMetadata& extra = {});
+
+/// A height map as a 16-bit grey PNG over its own range, with the range (tdf:height_min_mm,
+/// tdf:height_max_mm) and the map's metadata: load_height_input reads it back in mm.
+void write_height_preview_png(const std::string& path, const HeightMap& map);
 
 /// A height map as a grey PNG scaled to its own range (for step figures).
 void write_height_preview(const std::string& path, const Image& height);

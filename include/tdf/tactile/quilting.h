@@ -40,6 +40,11 @@ struct QuiltOptions {
     /// Blend across each boundary cut over +-feather pixels (0 = the reference's hard cut). A
     /// hard cut leaves a small step in a height map, which a normal map shows as a thin line.
     int feather = 0;
+    /// With exemplar masks (see quilt): a candidate block is used only when at least this
+    /// fraction of its pixels lies in its exemplar's mask, in [0, 1]. When fewer than 64
+    /// candidates (or 2 % of all) reach it, the bar drops to the coverage of the 64th best, so
+    /// a small textured region still quilts, from its most textured blocks.
+    float min_coverage = 0.95f;
     /// Wrap-around: the last column and row also match (and are cut against) the first ones,
     /// so the output tiles the plane without seams.
     bool tileable = false;
@@ -59,6 +64,9 @@ struct QuiltStats {
 struct QuiltResult {
     Image image;
     QuiltStats stats;
+    /// 1 channel, the image's size: 1 on the pixels of the boundary cuts that remain visible
+    /// (for seam measurements), else 0.
+    Image seams;
 };
 
 /// The output side for `options`: `size` when not tileable; when tileable, the multiple of the
@@ -67,9 +75,11 @@ struct QuiltResult {
 int quilt_output_side(const QuiltOptions& options);
 
 /// Synthesises a texture from one or more exemplars (same channel count, each at least
-/// block x block). `names` (optional, one per exemplar) label errors. Throws tdf::Error for
-/// invalid options, exemplars smaller than the block, mismatched channels or non-finite values.
+/// block x block). `names` (optional, one per exemplar) label errors. `masks` (optional, one
+/// per exemplar, 1 channel of its size, empty = all) mark where its texture lies: blocks are
+/// drawn from there (QuiltOptions::min_coverage). Throws tdf::Error for invalid options,
+/// exemplars smaller than the block, mismatched channels or sizes, or non-finite values.
 QuiltResult quilt(const std::vector<Image>& exemplars, const QuiltOptions& options,
-                  const std::vector<std::string>& names = {});
+                  const std::vector<std::string>& names = {}, const std::vector<Image>& masks = {});
 
 }  // namespace tdf

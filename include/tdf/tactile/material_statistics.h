@@ -1,0 +1,100 @@
+#pragma once
+/// Does a tactile normal map keep the material it came from? Statistics of the *detail* of a
+/// normal map (its slopes after a high-pass, so the curvature of a pressed object does not
+/// count), the textured region of a sample, and a texture-similarity distance. `tdf tactile
+/// convert` reports them for its input region and its output (README "tdf tactile").
+///
+/// The measure is the one of the project's yardstick script (check_tactile_material.py), so
+/// both give the same numbers: slopes sx = nx / nz, sy = ny / nz (nz clamped to at least 1e-3)
+/// minus their Gaussian low-pass (sigma 12 px, mirrored reflect-101 borders, taps out to
+/// int(3 sigma + 1)); detail tilt = atan(|(sx, sy)|) in degrees.
+#include <tdf/core/image.h>
+
+#include <string>
+#include <vector>
+
+namespace tdf {
+
+/// Gaussian sigma of the detail high-pass, pixels (the yardstick's).
+constexpr float kDetailSigmaPx = 12.0f;
+/// Texels tilted less than this are "flat", degrees.
+constexpr double kFlatDegrees = 1.0;
+
+/// High-passed slopes of decoded normals (3+ channels; the length does not matter).
+struct DetailSlopes {
+    Image slopes;  ///< 2 channels: detail sx (right), sy (up), dimensionless
+    Image tilt;    ///< 1 channel: atan(|slope|) in degrees
+};
+DetailSlopes detail_slopes(const Image& normals, float sigma_px = kDetailSigmaPx);
+
+/// Separable Gaussian blur of every channel, mirrored (reflect-101) borders, taps out to
+/// int(3 sigma + 1) pixels, weights normalised; the yardstick's `gblur`.
+Image gaussian_blur_mirrored(const Image& image, float sigma_px);
+
+/// The textured region of a sample from its detail tilt (1 channel, degrees): texels whose
+/// 15 x 15 local mean tilt (edge-replicated borders) is at least half the 90th percentile
+/// (linear interpolation) of that local mean. Drops the flat gel around a contact and the
+/// flat margins of a height image. Returns a 1-channel 0/1 mask.
+Image texture_region(const Image& tilt_degrees);
+
+/// Fraction of the mask's texels that are 1 (mask 1 channel; empty = all).
+double mask_fraction(const Image& mask);
+
+/// What a texture-similarity distance compares (see texture_distance).
+struct MaterialStatistics {
+    double fraction = 1;       ///< share of the image's texels counted (the region's area)
+    double mean_tilt = 0;      ///< mean detail tilt, degrees
+    double flat_fraction = 0;  ///< share of counted texels with detail tilt < 1 degree
+    /// Detail tilt histogram: 16 bins over [0, tilt_range] degrees, the last bin takes the rest.
+    std::vector<double> tilt_histogram;
+    /// Gradient orientation histogram (HOG-like): 8 bins over the direction of the detail
+    /// slope modulo 180 degrees, weighted by |slope|, normalised to sum 1. Tells ridges and
+    /// grooves from isotropic bumps, and a blocky grid from round cells.
+    std::vector<double> orientation_histogram;
+    /// Filter response per scale: share of the detail slope energy in the octave bands
+    /// [1, 2), [2, 4), [4, 8) px Gaussian differences, below 1 px and above 8 px (5 numbers,
+    /// sum 1). Tells fine pores from coarse cells at the same mean tilt.
+    std::vector<double> scale_energy;
+};
+
+/// Statistics of the texels of `detail` where `mask` (1 channel, empty = all) is non-zero;
+/// the tilt histogram spans [0, tilt_range] degrees (pass the same range for maps that are
+/// to be compared).
+MaterialStatistics material_statistics(const DetailSlopes& detail, const Image& mask, double tilt_range);
+
+/// Texture-similarity distance in [0, 1]: the mean of the L1 distances (each in [0, 2]) of
+/// the tilt, orientation and scale histograms, halved. 0 = the same statistics.
+double texture_distance(const MaterialStatistics& a, const MaterialStatistics& b);
+
+/// Input region against output, as `tdf tactile convert` reports it.
+struct MaterialComparison {
+    MaterialStatistics region;  ///< the input's textured region
+    MaterialStatistics output;  ///< the whole output
+    double tilt_ratio = 0;      ///< output mean tilt / region mean tilt
+    double flat_excess = 0;     ///< output flat fraction - region flat fraction
+    double distance = 0;        ///< texture_distance(region, output)
+    /// Its three L1 terms (each in [0, 2]): tilt, orientation and scale histograms.
+    double tilt_l1 = 0, orientation_l1 = 0, scale_l1 = 0;
+    /// One line of JSON with the numbers (keys as the yardstick's plus distance).
+    std::string json() const;
+};
+
+/// Compares `output` normals with the textured region of `input` normals (both decoded, 3+
+/// channels). `region` (1 channel, the input's size) selects the input texels; empty = found
+/// with texture_region. The tilt histograms span [0, 3 x region mean tilt].
+MaterialComparison compare_material(const Image& input, const Image& region, const Image& output);
+
+/// Limits a converted map should stay within (issue 11); `check` lists what is outside.
+struct MaterialLimits {
+    double min_ratio = 0.85, max_ratio = 1.15;  ///< output / region mean detail tilt
+    double flat_slack = 0.05;                   ///< output flat fraction - region's
+    double max_distance = 0.25;                 ///< texture_distance
+};
+std::vector<std::string> check_material(const MaterialComparison& c, const MaterialLimits& limits = {});
+
+/// Decoded normals as a file of `bits` (8 or 16) would give them back: the reference's
+/// floor((n * 0.5 + 0.5) * (2^bits - 1)) encoding, then decoded. What a reader of the written
+/// PNG sees (a 0.5 degree relief does not survive 8 bits).
+Image quantized_normals(const Image& normals, int bits);
+
+}  // namespace tdf

@@ -1,0 +1,274 @@
+#include <tdf/tactile/material_statistics.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace tdf {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kTiltBins = 16;
+constexpr int kOrientationBins = 8;
+constexpr float kScaleSigmas[] = {1.0f, 2.0f, 4.0f, 8.0f};
+
+// numpy's "reflect" padding (reflect-101): ... c b | a b c | b a ...
+int reflect(int i, int n) {
+    if (n == 1) return 0;
+    const int period = 2 * (n - 1);
+    i = std::abs(i) % period;
+    return i >= n ? period - i : i;
+}
+
+// One separable pass along x (rows) or y (columns), every channel.
+Image convolve_axis(const Image& in, const std::vector<double>& kernel, bool along_x) {
+    const int w = in.width(), h = in.height(), ch = in.channels();
+    const int r = int(kernel.size() / 2);
+    Image out(w, h, ch);
+    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
+        std::vector<double> sum(static_cast<std::size_t>(ch));
+        for (int y = int(y0); y < int(y1); ++y)
+            for (int x = 0; x < w; ++x) {
+                std::fill(sum.begin(), sum.end(), 0.0);
+                for (int k = -r; k <= r; ++k) {
+                    const int sx = along_x ? reflect(x + k, w) : x, sy = along_x ? y : reflect(y + k, h);
+                    const float* p = in.pixel(sx, sy);
+                    const double weight = kernel[std::size_t(k + r)];
+                    for (int c = 0; c < ch; ++c) sum[std::size_t(c)] += weight * p[c];
+                }
+                float* o = out.pixel(x, y);
+                for (int c = 0; c < ch; ++c) o[c] = float(sum[std::size_t(c)]);
+            }
+    });
+    return out;
+}
+
+// Mean over a (2r+1)^2 window with edge-replicated borders (separable).
+Image box_mean_replicated(const Image& in, int r) {
+    const int w = in.width(), h = in.height();
+    Image rows(w, h, 1), out(w, h, 1);
+    const double k = 1.0 / double(2 * r + 1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double s = 0;
+            for (int d = -r; d <= r; ++d) s += in.at(std::clamp(x + d, 0, w - 1), y, 0);
+            rows.at(x, y, 0) = float(s * k);
+        }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double s = 0;
+            for (int d = -r; d <= r; ++d) s += rows.at(x, std::clamp(y + d, 0, h - 1), 0);
+            out.at(x, y, 0) = float(s * k);
+        }
+    return out;
+}
+
+// numpy.percentile with linear interpolation.
+double percentile(std::vector<float> values, double q) {
+    TDF_CHECK(!values.empty());
+    std::sort(values.begin(), values.end());
+    const double position = q / 100.0 * double(values.size() - 1);
+    const std::size_t lo = std::size_t(std::floor(position));
+    const std::size_t hi = std::min(lo + 1, values.size() - 1);
+    const double t = position - double(lo);
+    return double(values[lo]) + t * (double(values[hi]) - double(values[lo]));
+}
+
+double l1(const std::vector<double>& a, const std::vector<double>& b) {
+    TDF_CHECK_EQ(a.size(), b.size());
+    double d = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) d += std::abs(a[i] - b[i]);
+    return d;
+}
+
+void normalise(std::vector<double>& h) {
+    double total = 0;
+    for (double v : h) total += v;
+    if (total > 0)
+        for (double& v : h) v /= total;
+}
+
+}  // namespace
+
+Image gaussian_blur_mirrored(const Image& image, float sigma_px) {
+    TDF_CHECK(sigma_px > 0.0f);
+    const int r = int(3.0f * sigma_px + 1.0f);
+    std::vector<double> kernel(std::size_t(2 * r + 1));
+    double total = 0;
+    for (int t = -r; t <= r; ++t)
+        total += kernel[std::size_t(t + r)] = std::exp(-double(t) * t / (2.0 * sigma_px * sigma_px));
+    for (double& k : kernel) k /= total;
+    return convolve_axis(convolve_axis(image, kernel, false), kernel, true);
+}
+
+DetailSlopes detail_slopes(const Image& normals, float sigma_px) {
+    TDF_CHECK(normals.channels() >= 3);
+    const int w = normals.width(), h = normals.height();
+    DetailSlopes d;
+    d.slopes = Image(w, h, 2);
+    for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
+        const float* n = normals.data() + p * std::size_t(normals.channels());
+        // Matches the yardstick: n normalised, then nz clamped to 1e-3.
+        const double length = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]) + 1e-12;
+        const double nz = std::max(double(n[2]) / length, 1e-3);
+        d.slopes.data()[2 * p] = float(n[0] / length / nz);
+        d.slopes.data()[2 * p + 1] = float(n[1] / length / nz);
+    }
+    const Image low = gaussian_blur_mirrored(d.slopes, sigma_px);
+    d.tilt = Image(w, h, 1);
+    for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
+        float& sx = d.slopes.data()[2 * p];
+        float& sy = d.slopes.data()[2 * p + 1];
+        sx -= low.data()[2 * p];
+        sy -= low.data()[2 * p + 1];
+        d.tilt.data()[p] = float(std::atan(std::hypot(double(sx), double(sy))) * 180.0 / kPi);
+    }
+    return d;
+}
+
+Image texture_region(const Image& tilt_degrees) {
+    TDF_CHECK_EQ(tilt_degrees.channels(), 1);
+    const Image local = box_mean_replicated(tilt_degrees, 7);
+    const double threshold = 0.5 * percentile(local.values(), 90.0);
+    Image mask(tilt_degrees.width(), tilt_degrees.height(), 1);
+    for (std::size_t p = 0; p < mask.pixel_count(); ++p)
+        mask.data()[p] = double(local.data()[p]) >= threshold ? 1.0f : 0.0f;
+    return mask;
+}
+
+double mask_fraction(const Image& mask) {
+    if (mask.empty()) return 1.0;
+    std::size_t count = 0;
+    for (float v : mask.values()) count += v != 0.0f;
+    return double(count) / double(mask.pixel_count());
+}
+
+MaterialStatistics material_statistics(const DetailSlopes& detail, const Image& mask, double tilt_range) {
+    TDF_CHECK(tilt_range > 0.0);
+    const Image& tilt = detail.tilt;
+    if (!mask.empty()) {
+        TDF_CHECK_EQ(mask.width(), tilt.width());
+        TDF_CHECK_EQ(mask.height(), tilt.height());
+    }
+    auto counted = [&](std::size_t p) { return mask.empty() || mask.data()[p] != 0.0f; };
+    MaterialStatistics s;
+    s.fraction = mask_fraction(mask);
+    s.tilt_histogram.assign(kTiltBins, 0.0);
+    s.orientation_histogram.assign(kOrientationBins, 0.0);
+    double sum = 0, flat = 0, count = 0;
+    for (std::size_t p = 0; p < tilt.pixel_count(); ++p) {
+        if (!counted(p)) continue;
+        const double t = tilt.data()[p];
+        sum += t;
+        flat += t < kFlatDegrees;
+        count += 1;
+        s.tilt_histogram[std::size_t(std::min(kTiltBins - 1, int(t / tilt_range * kTiltBins)))] += 1;
+        const double sx = detail.slopes.data()[2 * p], sy = detail.slopes.data()[2 * p + 1];
+        double angle = std::atan2(sy, sx);  // direction modulo 180 degrees, in [0, pi)
+        if (angle < 0) angle += kPi;
+        if (angle >= kPi) angle -= kPi;
+        const int bin = std::min(kOrientationBins - 1, int(angle / kPi * kOrientationBins));
+        s.orientation_histogram[std::size_t(bin)] += std::hypot(sx, sy);
+    }
+    if (count > 0) s.mean_tilt = sum / count, s.flat_fraction = flat / count;
+    normalise(s.tilt_histogram);
+    normalise(s.orientation_histogram);
+
+    // Octave bands of the slope field: s - G1 s, G1 s - G2 s, G2 s - G4 s, G4 s - G8 s, G8 s.
+    std::vector<Image> levels{detail.slopes};
+    for (float sigma : kScaleSigmas) levels.push_back(gaussian_blur_mirrored(detail.slopes, sigma));
+    s.scale_energy.assign(levels.size(), 0.0);
+    for (std::size_t band = 0; band < levels.size(); ++band) {
+        const Image& a = levels[band];
+        const Image* b = band + 1 < levels.size() ? &levels[band + 1] : nullptr;
+        double energy = 0;
+        for (std::size_t p = 0; p < tilt.pixel_count(); ++p) {
+            if (!counted(p)) continue;
+            for (std::size_t c = 0; c < 2; ++c) {
+                const double v = double(a.data()[2 * p + c]) - (b ? double(b->data()[2 * p + c]) : 0.0);
+                energy += v * v;
+            }
+        }
+        s.scale_energy[band] = energy;
+    }
+    normalise(s.scale_energy);
+    return s;
+}
+
+double texture_distance(const MaterialStatistics& a, const MaterialStatistics& b) {
+    return (l1(a.tilt_histogram, b.tilt_histogram) + l1(a.orientation_histogram, b.orientation_histogram) +
+            l1(a.scale_energy, b.scale_energy)) /
+           6.0;
+}
+
+std::string MaterialComparison::json() const {
+    return fmt::format(
+        "{{\"region_fraction\": {:.4f}, \"region_mean_tilt\": {:.4f}, \"region_flat\": {:.4f}, "
+        "\"out_mean_tilt\": {:.4f}, \"out_flat\": {:.4f}, \"tilt_ratio\": {:.4f}, \"distance\": {:.4f}, \"tilt_l1\": {:.3f}, "
+        "\"orientation_l1\": {:.3f}, \"scale_l1\": {:.3f}}}",
+        region.fraction,
+        region.mean_tilt,
+        region.flat_fraction,
+        output.mean_tilt,
+        output.flat_fraction,
+        tilt_ratio,
+        distance,
+        tilt_l1,
+        orientation_l1,
+        scale_l1);
+}
+
+MaterialComparison compare_material(const Image& input, const Image& region, const Image& output) {
+    const DetailSlopes in = detail_slopes(input), out = detail_slopes(output);
+    const Image mask = region.empty() ? texture_region(in.tilt) : region;
+    MaterialComparison c;
+    // The histogram range follows the region's relief, so that bins resolve it whatever its
+    // amplitude; a first pass gives the region's mean tilt.
+    const double mean = material_statistics(in, mask, 90.0).mean_tilt;
+    const double range = std::max(3.0 * mean, 1e-3);
+    c.region = material_statistics(in, mask, range);
+    c.output = material_statistics(out, Image(), range);
+    c.tilt_ratio = c.output.mean_tilt / std::max(c.region.mean_tilt, 1e-9);
+    c.flat_excess = c.output.flat_fraction - c.region.flat_fraction;
+    c.distance = texture_distance(c.region, c.output);
+    c.tilt_l1 = l1(c.region.tilt_histogram, c.output.tilt_histogram);
+    c.orientation_l1 = l1(c.region.orientation_histogram, c.output.orientation_histogram);
+    c.scale_l1 = l1(c.region.scale_energy, c.output.scale_energy);
+    return c;
+}
+
+std::vector<std::string> check_material(const MaterialComparison& c, const MaterialLimits& limits) {
+    std::vector<std::string> bad;
+    if (c.tilt_ratio < limits.min_ratio)
+        bad.push_back(fmt::format("flatter than the input: detail tilt {:.2f} of the input region's (at least {:.2f})",
+                                  c.tilt_ratio,
+                                  limits.min_ratio));
+    if (c.tilt_ratio > limits.max_ratio)
+        bad.push_back(fmt::format("steeper than the input: detail tilt {:.2f} of the input region's (at most {:.2f})",
+                                  c.tilt_ratio,
+                                  limits.max_ratio));
+    if (c.flat_excess > limits.flat_slack)
+        bad.push_back(fmt::format("{:.1f} % flat texels against {:.1f} % in the input region",
+                                  100.0 * c.output.flat_fraction,
+                                  100.0 * c.region.flat_fraction));
+    if (c.distance > limits.max_distance)
+        bad.push_back(fmt::format("texture distance {:.3f} to the input region (at most {:.3f})", c.distance, limits.max_distance));
+    return bad;
+}
+
+Image quantized_normals(const Image& normals, int bits) {
+    TDF_CHECK(bits == 8 || bits == 16);
+    const float max_value = bits == 16 ? 65535.0f : 255.0f;
+    Image out = normals;
+    for (float& v : out.values()) {
+        // As write_png(Quantize::Truncate) then read_image: clamp, floor, divide, decode.
+        const float e = std::clamp(v * 0.5f + 0.5f, 0.0f, 1.0f) * max_value;
+        v = std::floor(e) / max_value * 2.0f - 1.0f;
+    }
+    return out;
+}
+
+}  // namespace tdf
