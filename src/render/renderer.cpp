@@ -188,7 +188,7 @@ public:
                     const Vec3f l = m_light.kind == Light::Kind::Point
                                         ? safe_normalize(m_light.vector - g.position[i])
                                         : m_light.vector;
-                    const float shade = m_light.ambient + (1.f - m_light.ambient) * std::max(0.f, dot(n, l));
+                    const float shade = visualizer_shade(n, l, m_light.ambient);
                     put3(o, lit_color(albedo, shade, m_color_space));
                 }
             }

@@ -8,7 +8,7 @@
 #include <tdf/guidance/relief_shading.h>
 #include <tdf/guidance/schedule.h>
 #include <tdf/loss/image_loss.h>
-#include <tdf/loss/shading_grad.h>
+#include <tdf/render/shading.h>
 #include <tdf/loss/tactile_loss.h>
 #include <tdf/render/resample.h>
 #include <tdf/render/shading.h>
@@ -625,7 +625,7 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
                 [&](std::size_t p, std::size_t q) {
                     // The shading normal is detached (spec 3.4): only the albedo gets gradient.
                     const Vec3f n_s = compose_shading_normal(frame_at(g, p), b.outputs[q].normal);
-                    b.shade[q] = lambert_shade(n_s, light, g.position[p]);
+                    b.shade[q] = training_shade(n_s, light, g.position[p]);
                     return lambertian(b.outputs[q].albedo, b.shade[q]);
                 },
                 b.lambertian.data() + std::size_t(k) * view_values);

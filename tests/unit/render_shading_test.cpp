@@ -17,13 +17,13 @@ TEST(Shading, HandedFrameEqualsSpecFormulaForPositiveW) {
         const Vec3f p = safe_normalize({rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.2f, 1)});
         const Vec3f B = safe_normalize(cross(T, N));
         const Vec3f spec = safe_normalize(T * p.x - B * p.y + N * p.z);  // spec 3.3
-        const Vec3f ours = shading_normal(T, N, 1.f, p);
+        const Vec3f ours = compose_shading_normal({T, N, 1.f}, p);
         EXPECT_NEAR(length(ours - spec), 0.f, 1e-5f);
         // w = -1 flips only the bitangent term.
-        const Vec3f mirrored = shading_normal(T, N, -1.f, p);
+        const Vec3f mirrored = compose_shading_normal({T, N, -1.f}, p);
         EXPECT_NEAR(length(mirrored - safe_normalize(T * p.x + B * p.y + N * p.z)), 0.f, 1e-5f);
     }
-    EXPECT_EQ(length(shading_normal({}, {}, 1.f, {0, 0, 1})), 0.f);  // background frame stays zero
+    EXPECT_EQ(length(compose_shading_normal({}, {0, 0, 1})), 0.f);  // background frame stays zero
 }
 
 TEST(Shading, Magic3dLightStaysNearTheCameraDirection) {

@@ -69,6 +69,15 @@ inline Vec3f safe_normalize(Vec3f a) { return a / std::sqrt(std::max(dot(a, a), 
 inline Vec3f normalize_or_zero(Vec3f a, float eps = 1e-12f) {
     return a / std::max(length(a), eps);
 }
+
+/// d normalize(x) / dx applied to an upstream gradient g, for x / max(|x|, min_length):
+/// (g - n (n.g)) / |x| above the threshold, g / min_length below it (where the map is linear).
+inline Vec3f normalize_backward(Vec3f x, Vec3f g, float min_length) {
+    const float len = length(x);
+    if (len <= min_length) return g / min_length;
+    const Vec3f n = x / len;
+    return (g - n * dot(n, g)) / len;
+}
 inline bool is_finite(Vec3f a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 #include <tdf/core/rng.h>
-#include <tdf/loss/shading_grad.h>
+#include <tdf/render/shading.h>
 
 #include "common/gradcheck.h"
 
@@ -83,10 +83,10 @@ TEST(ShadingGrad, ViewSpaceNormalBackwardMatchesFiniteDifferences) {
 
 TEST(ShadingGrad, LambertShadeValuesAndAlbedoGradient) {
     // Light straight above a +z surface: n.l = 1 -> shade 1; facing away -> ambient 0.5.
-    EXPECT_FLOAT_EQ(lambert_shade({0, 0, 1}, {0, 0, 4}, {0, 0, 0}), 1.0f);
-    EXPECT_FLOAT_EQ(lambert_shade({0, 0, -1}, {0, 0, 4}, {0, 0, 0}), 0.5f);
-    EXPECT_NEAR(lambert_shade({0, 0, 1}, {4, 0, 4}, {0, 0, 0}), 0.5f + 0.5f / std::sqrt(2.0f), 1e-6f);
-    const float shade = lambert_shade(safe_normalize({0.2f, 0.1f, 1}), {1, 2, 4}, {0.1f, 0, 0});
+    EXPECT_FLOAT_EQ(training_shade({0, 0, 1}, {0, 0, 4}, {0, 0, 0}), 1.0f);
+    EXPECT_FLOAT_EQ(training_shade({0, 0, -1}, {0, 0, 4}, {0, 0, 0}), 0.5f);
+    EXPECT_NEAR(training_shade({0, 0, 1}, {4, 0, 4}, {0, 0, 0}), 0.5f + 0.5f / std::sqrt(2.0f), 1e-6f);
+    const float shade = training_shade(safe_normalize({0.2f, 0.1f, 1}), {1, 2, 4}, {0.1f, 0, 0});
     const Vec3f albedo(0.2f, 0.5f, 0.9f), upstream(0.3f, -1.0f, 0.7f);
     const Vec3f d = lambertian_backward(shade, upstream);
     EXPECT_TRUE(check_gradient(
