@@ -127,6 +127,7 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
         m_albedo_target = tdf::albedo_target(*m_atlas, *target.material, *target.mesh);
         m_tactile_target = tdf::tactile_target(*m_atlas, *target.material);
         m_albedo_target_texture = MipTexture(m_albedo_target);
+        m_tactile_target_texture = MipTexture(m_tactile_target);
         m_maps = std::make_unique<LearnedMaps>(*m_atlas);
         m_residual_adam = std::make_unique<Adam>(m_maps->residual().size(), hyper);
         log_verbose("texture-space optimizer: {} of {} texels covered ({:.1f} %)", m_atlas->covered_count(),
@@ -486,7 +487,10 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
                     continue;
                 }
                 pred[p] = tangent_to_view(g, p, rot, b.outputs[std::size_t(q)].normal);
-                target[p] = target_view_normal(m_target, g, p, rot);
+                // The target laid over the atlas (texture evaluation: sampled exactly as the learned
+                // map is, so the two agree when the maps equal their targets), or the material's map.
+                target[p] = texture_space() ? tangent_to_view(g, p, rot, lookup_target_normal(std::size_t(q)))
+                                            : target_view_normal(m_target, g, p, rot);
             }
         });
     }
@@ -564,6 +568,15 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
             }
         });
     }
+}
+
+Vec3f Trainer::lookup_target_normal(std::size_t q) const {
+    const Batch& b = *m_batch;
+    TrilinearTaps taps;
+    float value[3];
+    m_tactile_target_texture.taps(b.lookup_uv[q], b.lookup_lod[q], -1, taps);
+    m_tactile_target_texture.gather(taps, value);
+    return safe_normalize(Vec3f{value[0], value[1], value[2]});
 }
 
 // ---- 4b. Visual terms on the global views (spec 5.2, 5.4) -----------------------------------

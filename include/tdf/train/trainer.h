@@ -164,6 +164,8 @@ private:
     void evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs) const;
     /// Traces `camera` into `g` and evaluates the surface at its hits, in pixel order.
     void trace_and_evaluate(const Camera& camera, GBuffer& g, std::vector<FieldOutputs>& outputs) const;
+    /// Texture evaluation: the tactile target over the atlas at hit q's lookup, renormalised.
+    Vec3f lookup_target_normal(std::size_t q) const;
     bool texture_space() const { return m_config.evaluation == FieldEvaluation::Texture; }
 
     const TrainingTarget m_target;
@@ -176,7 +178,8 @@ private:
     std::unique_ptr<TexelAtlas> m_atlas;
     std::unique_ptr<LearnedMaps> m_maps;
     Image m_albedo_target, m_tactile_target;
-    MipTexture m_albedo_target_texture;  // the input albedo over the atlas, as renders sample it
+    MipTexture m_albedo_target_texture;   // the input albedo over the atlas, as renders sample it
+    MipTexture m_tactile_target_texture;  // the tactile target over the atlas, likewise
     std::unique_ptr<Adam> m_residual_adam;
     std::vector<float> m_residual_gradient;
     bool m_maps_ready = false;
