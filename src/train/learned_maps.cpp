@@ -20,8 +20,13 @@ LearnedMaps::LearnedMaps(const TexelAtlas& atlas)
     for (FieldOutputs& o : m_field_outputs) o = FieldOutputs{{0.5f, 0.5f, 0.5f}, {0, 0, 1}, {0, 0}};
 }
 
-void LearnedMaps::evaluate_field(const TextureField& field) {
-    field.evaluate(m_atlas->points.data(), m_atlas->points.size(), m_field_outputs.data(), m_cache);
+void LearnedMaps::evaluate_field(const TextureField& field, bool keep_encodings) {
+    if (keep_encodings) {
+        field.evaluate(m_atlas->points.data(), m_atlas->points.size(), m_field_outputs.data(), m_cache);
+    } else {
+        m_cache.clear();  // 128 bytes a texel: kept only for a field_backward() to follow
+        field.evaluate(m_atlas->points.data(), m_atlas->points.size(), m_field_outputs.data());
+    }
 }
 
 void LearnedMaps::set_residual_to(const Image& albedo, const Image& normal) {

@@ -13,6 +13,7 @@
 #include <tdf/train/asset_export.h>
 #include <tdf/train/run_report.h>
 #include <tdf/train/run_guard.h>
+#include <tdf/train/texture_fidelity.h>
 #include <tdf/train/trainer.h>
 
 #include <fmt/format.h>
@@ -113,6 +114,19 @@ std::unique_ptr<GuidanceBackend> make_backend(const std::string& name, const Run
         backend->set_exemplars(std::move(exemplars));
     }
     return backend;
+}
+
+// Texture-space fidelity of the learned maps against the targets laid over the atlas (issue 10's
+// goals 1 and 2), over the covered texels; null for pixel evaluation.
+Json texture_space_quality(const Trainer& trainer) {
+    const TexelAtlas* atlas = trainer.texel_atlas();
+    if (!atlas) return Json();
+    const BakedMaps maps = trainer.export_maps();
+    std::vector<std::uint8_t> covered(atlas->texel_count(), 0);
+    for (std::uint32_t t : atlas->texels) covered[t] = 1;
+    return measure_texture_fidelity(maps.albedo, trainer.albedo_target(), maps.tactile_normal,
+                                    trainer.tactile_target(), covered)
+        .to_json();
 }
 
 const Json& section(const SceneDescription& d, const char* name) {
@@ -238,8 +252,10 @@ void run_optimize(const OptimizeOptions& options) {
             write_asset(options.output_dir, name, "_initialized", trainer.export_maps(), export_mesh, config);
             // The issue's quality measure is taken here, after the matching phase.
             const QualityReport matched = trainer.evaluate_held_out();
-            write_text_atomically(base + "_initialized_report.json",
-                                  Json({{"quality", matched.to_json()}, {"iteration", done}}).dump(2) + "\n");
+            Json initialized = {{"quality", matched.to_json()}, {"iteration", done}};
+            if (const Json texture = texture_space_quality(trainer); !texture.is_null())
+                initialized["texture_space"] = texture;
+            write_text_atomically(base + "_initialized_report.json", initialized.dump(2) + "\n");
             log_info("after matching: albedo PSNR {:.2f} dB (held-out views, foreground), tactile mean cosine {:.4f}",
                      matched.albedo_psnr_foreground, matched.tactile_mean_cosine);
         }
@@ -259,11 +275,12 @@ void run_optimize(const OptimizeOptions& options) {
     const QualityReport quality = trainer.evaluate_held_out();
     write_turntable(options.output_dir, assets->mesh, *assets->scene, maps, config.turntable_views,
                     config.turntable_resolution);
-    const Json report = {{"quality", quality.to_json()},
+    Json report = {{"quality", quality.to_json()},
                          {"seconds_per_iteration", trainer.stage_times().to_json(trainer.iteration())},
                          {"seconds_total", progress.elapsed_seconds()},
                          {"seed", description.seed},
                          {"threads", ThreadLimit::current()}};
+    if (const Json texture = texture_space_quality(trainer); !texture.is_null()) report["texture_space"] = texture;
     write_text_atomically(base + "_report.json", report.dump(2) + "\n");
     log_info("held-out quality: albedo PSNR {:.2f} dB (foreground), tactile mean cosine {:.4f}; report in {}_report.json",
              quality.albedo_psnr_foreground, quality.tactile_mean_cosine, base);

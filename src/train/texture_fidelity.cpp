@@ -3,6 +3,7 @@
 #include <tdf/core/error.h>
 #include <tdf/core/vec.h>
 #include <tdf/guidance/image_filters.h>
+#include <tdf/render/gbuffer.h>
 
 #include <algorithm>
 #include <cmath>
@@ -149,6 +150,33 @@ Json TextureFidelity::to_json() const {
             {"albedo_hf_where_flat", albedo_hf_flat}, {"normal_mean_cosine", normal_mean_cos},
             {"normal_p10_cosine", normal_p10_cos},   {"normal_hf_ratio", normal_hf_ratio},
             {"flat_fraction", flat_fraction}, {"coverage", coverage}};
+}
+
+void SeamJump::add(const GBuffer& g, const Image& image, int map_size) {
+    const int c = image.channels();
+    const float texel = 1.0f / float(std::max(map_size, 1));
+    const auto pair = [&](std::size_t a, std::size_t b, Vec2f step) {
+        if (g.mask[a] <= 0.0f || g.mask[b] <= 0.0f) return;
+        const Vec2f d = g.uv[b] - g.uv[a] - step;
+        const float expected = 8.0f * std::sqrt(step.x * step.x + step.y * step.y) + 2.0f * texel;
+        double diff = 0;
+        for (int k = 0; k < c; ++k)
+            diff += std::fabs(double(image.data()[b * std::size_t(c) + std::size_t(k)]) -
+                              image.data()[a * std::size_t(c) + std::size_t(k)]);
+        if (std::sqrt(d.x * d.x + d.y * d.y) > expected) {
+            seam_sum += diff;
+            ++seam_pairs;
+        } else {
+            interior_sum += diff;
+            ++interior_pairs;
+        }
+    };
+    for (int y = 0; y < g.height; ++y)
+        for (int x = 0; x < g.width; ++x) {
+            const std::size_t i = g.index(x, y);
+            if (x + 1 < g.width) pair(i, i + 1, g.duv_dx[i]);
+            if (y + 1 < g.height) pair(i, i + std::size_t(g.width), g.duv_dy[i]);
+        }
 }
 
 }  // namespace tdf

@@ -1,5 +1,7 @@
 #include <tdf/train/trainer.h>
 
+#include <tdf/train/texture_fidelity.h>
+
 #include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
@@ -129,7 +131,9 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
         m_albedo_target_texture = MipTexture(m_albedo_target);
         m_tactile_target_texture = MipTexture(m_tactile_target);
         m_maps = std::make_unique<LearnedMaps>(*m_atlas);
-        m_residual_adam = std::make_unique<Adam>(m_maps->residual().size(), hyper);
+        // Adam state for the residual only when it is Adam's to update (the Jacobi step has none).
+        if (config.residual_optimizer == "adam")
+            m_residual_adam = std::make_unique<Adam>(m_maps->residual().size(), hyper);
         log_verbose("texture-space optimizer: {} of {} texels covered ({:.1f} %)", m_atlas->covered_count(),
                     m_atlas->texel_count(), 100.0 * double(m_atlas->covered_count()) / double(m_atlas->texel_count()));
         if (config.init_iterations == 0) prepare_maps();
@@ -159,6 +163,11 @@ AdamState Trainer::optimizer_state() const {
         const AdamState& r = m_residual_adam->state();
         state.m.insert(state.m.end(), r.m.begin(), r.m.end());
         state.v.insert(state.v.end(), r.v.begin(), r.v.end());
+    } else if (m_maps) {
+        // The Jacobi step keeps no moments; zeros keep the checkpoint's layout (one moment per
+        // parameter) the same for both residual optimizers.
+        state.m.resize(state.m.size() + m_maps->residual().size(), 0.0f);
+        state.v.resize(state.v.size() + m_maps->residual().size(), 0.0f);
     }
     return state;
 }
@@ -166,8 +175,8 @@ AdamState Trainer::optimizer_state() const {
 void Trainer::restore(int iteration, const std::vector<float>& parameters, const AdamState& adam) {
     const std::size_t field_count = m_field->parameter_count();
     const std::size_t residual_count = m_maps ? m_maps->residual().size() : 0;
-    if (parameters.size() != field_count + residual_count || adam.m.size() != parameters.size() ||
-        adam.v.size() != parameters.size())
+    const std::size_t moments = field_count + residual_count;
+    if (parameters.size() != field_count + residual_count || adam.m.size() != moments || adam.v.size() != moments)
         throw_error("checkpoint has {} parameters, this configuration needs {}", parameters.size(),
                     field_count + residual_count);
     const auto split = [&](const std::vector<float>& all, std::size_t begin, std::size_t count) {
@@ -180,11 +189,12 @@ void Trainer::restore(int iteration, const std::vector<float>& parameters, const
         m_maps->residual() = split(parameters, field_count, residual_count);
         // The residual takes one step per refinement iteration, from the end of matching on.
         const std::int64_t residual_steps = std::max(0, iteration - m_config.init_iterations);
-        m_residual_adam->restore(AdamState{split(adam.m, field_count, residual_count),
-                                           split(adam.v, field_count, residual_count), residual_steps});
+        if (m_residual_adam)
+            m_residual_adam->restore(AdamState{split(adam.m, field_count, residual_count),
+                                               split(adam.v, field_count, residual_count), residual_steps});
         m_maps_ready = false;
         if (iteration >= m_config.init_iterations) {
-            m_maps->evaluate_field(*m_field);
+            m_maps->evaluate_field(*m_field, m_config.refine_grid);
             m_maps->update();
             m_maps_ready = true;
         }
@@ -193,7 +203,7 @@ void Trainer::restore(int iteration, const std::vector<float>& parameters, const
 
 void Trainer::prepare_maps() {
     if (m_maps_ready) return;
-    m_maps->evaluate_field(*m_field);
+    m_maps->evaluate_field(*m_field, m_config.refine_grid);
     m_maps->set_residual_to(m_albedo_target, m_tactile_target);
     m_maps->update();
     m_maps_ready = true;
@@ -291,7 +301,7 @@ void Trainer::set_parameters(const std::vector<float>& parameters) {
     if (m_maps) {
         std::copy(parameters.begin() + std::ptrdiff_t(field_count), parameters.end(), m_maps->residual().begin());
         if (m_maps_ready) {
-            m_maps->evaluate_field(*m_field);
+            m_maps->evaluate_field(*m_field, m_config.refine_grid);
             m_maps->update();
         }
     }
@@ -820,7 +830,7 @@ void Trainer::update(int i) {
         m_residual_adam->step(m_maps->residual(), m_residual_gradient);
     if (m_config.refine_grid) {
         m_adam->step(m_field->parameters(), m_gradient);
-        m_maps->evaluate_field(*m_field);
+        m_maps->evaluate_field(*m_field, m_config.refine_grid);
     }
     m_maps->update();
 }
@@ -904,6 +914,7 @@ QualityReport Trainer::evaluate_held_out() const {
     const TriangleMesh& mesh = *m_target.mesh;
     QualityReport report;
     double squared = 0, max_error = 0, alignment = 0;
+    SeamJump albedo_seams, normal_seams;
     std::size_t values_fg = 0, values_full = 0;
     GBuffer g;
     std::vector<FieldOutputs> outputs;
@@ -923,7 +934,12 @@ QualityReport Trainer::evaluate_held_out() const {
         }
         const LearnedImages learned = learned_images(camera, g, outputs);
         alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
+        albedo_seams.add(g, learned.albedo, cfg.texture_size);
+        normal_seams.add(g, learned.view_normals, cfg.texture_size);
     }
+    report.seam_jump_ratio_albedo = albedo_seams.ratio();
+    report.seam_jump_ratio_normal = normal_seams.ratio();
+    report.seam_pairs = albedo_seams.seam_pairs;
     const auto psnr = [](double sum, std::size_t count) {
         if (count == 0) return 0.0;
         const double mse = sum / double(count);
@@ -974,6 +990,9 @@ Json QualityReport::to_json() const {
             {"colour_geometry_correlation", colour_geometry_correlation},
             {"tactile_tilt_distance", tactile_tilt_distance},
             {"target_tilt_distance", target_tilt_distance},
+            {"seam_jump_ratio_albedo", seam_jump_ratio_albedo},
+            {"seam_jump_ratio_normal", seam_jump_ratio_normal},
+            {"seam_pixel_pairs", seam_pairs},
             {"held_out_views", views},
             {"held_out_patches", patches}};
 }

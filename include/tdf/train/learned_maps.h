@@ -27,8 +27,9 @@ public:
     std::vector<float>& residual() { return m_residual; }
     const std::vector<float>& residual() const { return m_residual; }
 
-    /// Evaluates `field` at every texel's surface point and keeps the encodings for backward().
-    void evaluate_field(const TextureField& field);
+    /// Evaluates `field` at every texel's surface point; with `keep_encodings` keeps them for a
+    /// following field_backward() (128 bytes per texel).
+    void evaluate_field(const TextureField& field, bool keep_encodings = false);
     /// Sets the residual so that the maps equal `albedo` and `normal` (size x size, RGB) exactly
     /// on every covered texel: r = target - field (call after evaluate_field).
     void set_residual_to(const Image& albedo, const Image& normal);

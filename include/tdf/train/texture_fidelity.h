@@ -11,6 +11,8 @@
 
 namespace tdf {
 
+struct GBuffer;
+
 struct TextureFidelity {
     double albedo_psnr = 0;          ///< dB, full band
     double albedo_psnr_lowpass = 0;  ///< dB after a Gaussian of `lowpass_sigma` texels on both maps
@@ -34,5 +36,19 @@ struct TextureFidelity {
 TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albedo_target, const Image& normal,
                                          const Image& normal_target, const std::vector<std::uint8_t>& covered,
                                          float lowpass_sigma = 2.0f);
+
+/// Seams as a viewer sees them (issue 10 goal 4): the mean |difference| (summed over channels)
+/// of an image between horizontally or vertically neighbouring surface pixels of a traced view,
+/// split into pairs whose UVs jump (they differ from what the ray differentials predict by more
+/// than 8 pixels' worth plus two texels of a `map_size` map: the two pixels lie on different
+/// charts) and pairs inside a chart. Accumulates over views; `ratio()` is seam / interior.
+struct SeamJump {
+    double seam_sum = 0, interior_sum = 0;
+    std::size_t seam_pairs = 0, interior_pairs = 0;
+    void add(const GBuffer& g, const Image& image, int map_size);
+    double seam() const { return seam_pairs ? seam_sum / double(seam_pairs) : 0.0; }
+    double interior() const { return interior_pairs ? interior_sum / double(interior_pairs) : 0.0; }
+    double ratio() const { return interior() > 0 ? seam() / interior() : 0.0; }
+};
 
 }  // namespace tdf

@@ -67,6 +67,11 @@ struct QualityReport {
     double tactile_tilt_distance = 0;
     /// The same for the target normals at those hits: the floor that sampling leaves.
     double target_tilt_distance = 0;
+    /// Seams (issue 10 goal 4): mean colour / view-space normal jump between neighbouring pixels
+    /// across UV seams over the jump inside charts, on the held-out views (SeamJump).
+    double seam_jump_ratio_albedo = 0;
+    double seam_jump_ratio_normal = 0;
+    std::size_t seam_pairs = 0;
     int views = 0;
     int patches = 0;
     Json to_json() const;
