@@ -85,14 +85,6 @@ std::string host_name() {
     return host;
 }
 
-std::string utc_timestamp() {
-    const std::time_t now = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&now, &tm);
-    char text[32];
-    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return text;
-}
 
 BatchFolder BatchFolder::create(const std::string& root, const std::vector<BatchJob>& jobs,
                                 const std::string& tdf_executable, const std::string& working_folder) {

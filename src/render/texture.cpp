@@ -54,6 +54,24 @@ inline int wrap_floor(float floored, int n) {
     return wrap(int(std::fmod(floored, float(n))), n);
 }
 
+// The two texel columns and rows a bilinear lookup at uv blends (texel centres at (k + 0.5) /
+// size, v up, wrap addressing) and the blend weights: one addressing for lookups and their taps.
+struct BilinearFootprint {
+    int x0, x1, y0, y1;
+    float ax, ay;
+};
+inline BilinearFootprint bilinear_footprint(const Image& img, Vec2f uv) {
+    const int w = img.width(), h = img.height();
+    const float x = uv.x * float(w) - 0.5f;
+    const float y = (1.f - uv.y) * float(h) - 0.5f;
+    const float fx0 = std::floor(x), fy0 = std::floor(y);
+    BilinearFootprint f;
+    f.ax = x - fx0, f.ay = y - fy0;
+    f.x0 = wrap_floor(fx0, w), f.y0 = wrap_floor(fy0, h);
+    f.x1 = f.x0 + 1 == w ? 0 : f.x0 + 1, f.y1 = f.y0 + 1 == h ? 0 : f.y0 + 1;
+    return f;
+}
+
 }  // namespace
 
 void downsample_box_into(const Image& src, Image& dst) {
@@ -151,13 +169,10 @@ inline void blend(const float* p00, const float* p10, const float* p01, const fl
 
 void MipTexture::sample_level(int level, Vec2f uv, float* out) const {
     const Image& img = m_levels[std::size_t(level)];
-    const int w = img.width(), h = img.height(), c = img.channels();
-    const float x = uv.x * float(w) - 0.5f;
-    const float y = (1.f - uv.y) * float(h) - 0.5f;
-    const float fx0 = std::floor(x), fy0 = std::floor(y);
-    const float ax = x - fx0, ay = y - fy0;
-    const int x0 = wrap_floor(fx0, w), y0 = wrap_floor(fy0, h);
-    const int x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
+    const int w = img.width(), c = img.channels();
+    const BilinearFootprint f = bilinear_footprint(img, uv);
+    const int x0 = f.x0, x1 = f.x1, y0 = f.y0, y1 = f.y1;
+    const float ax = f.ax, ay = f.ay;
     const float* row0 = img.data() + std::size_t(y0) * std::size_t(w) * std::size_t(c);
     const float* row1 = img.data() + std::size_t(y1) * std::size_t(w) * std::size_t(c);
     const float *p00 = row0 + x0 * c, *p10 = row0 + x1 * c, *p01 = row1 + x0 * c, *p11 = row1 + x1 * c;
@@ -203,13 +218,10 @@ void MipTexture::sample_trilinear_at(Vec2f uv, float lod, float* out, int max_le
 namespace {
 // The four bilinear taps of `level` at uv, exactly as sample_level addresses them.
 void add_level_taps(const Image& img, int level, Vec2f uv, float scale, TrilinearTaps& taps) {
-    const int w = img.width(), h = img.height();
-    const float x = uv.x * float(w) - 0.5f;
-    const float y = (1.f - uv.y) * float(h) - 0.5f;
-    const float fx0 = std::floor(x), fy0 = std::floor(y);
-    const float ax = x - fx0, ay = y - fy0;
-    const int x0 = wrap_floor(fx0, w), y0 = wrap_floor(fy0, h);
-    const int x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
+    const int w = img.width();
+    const BilinearFootprint f = bilinear_footprint(img, uv);
+    const int x0 = f.x0, x1 = f.x1, y0 = f.y0, y1 = f.y1;
+    const float ax = f.ax, ay = f.ay;
     const auto add = [&](int tx, int ty, float weight) {
         const int k = taps.count++;
         taps.level[k] = level;

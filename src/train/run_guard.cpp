@@ -347,14 +347,6 @@ std::string validated_folder(const std::string& output_dir, const std::string& n
     return output_dir;
 }
 
-std::string utc_now() {
-    const std::time_t now = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&now, &tm);
-    char text[32];
-    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return text;
-}
 
 }  // namespace
 
@@ -398,10 +390,19 @@ void RunGuard::complete(const Json& extra) const {
     Json record = {{"command", m_command},
                    {"name", m_name},
                    {"seconds", seconds()},
-                   {"finished", utc_now()},
+                   {"finished", utc_timestamp()},
                    {"files", files}};
     for (auto it = extra.begin(); it != extra.end(); ++it) record[it.key()] = *it;
     write_text_atomically(record_path, record.dump(2) + "\n");
+}
+
+std::string utc_timestamp() {
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    gmtime_r(&now, &tm);
+    char text[32];
+    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return text;
 }
 
 }  // namespace tdf

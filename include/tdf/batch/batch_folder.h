@@ -9,6 +9,7 @@
 ///   DIR/logs/slurm-*.out     Slurm's own per-task output (slurm engine)
 ///   DIR/slurm/               the array script, the summary script, the submissions
 ///   DIR/summary.json, .csv   per job: status, error, times, quality numbers, thumbnail
+#include <tdf/train/run_guard.h>  // utc_timestamp
 #include <tdf/batch/manifest.h>
 
 #include <string>
@@ -80,7 +81,5 @@ private:
 
 /// This machine's host name.
 std::string host_name();
-/// Now, UTC, ISO 8601.
-std::string utc_timestamp();
 
 }  // namespace tdf

@@ -142,4 +142,7 @@ private:
     std::chrono::steady_clock::time_point m_start;
 };
 
+/// Now, UTC, ISO 8601 (completion records, batch states).
+std::string utc_timestamp();
+
 }  // namespace tdf
