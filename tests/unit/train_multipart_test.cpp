@@ -86,7 +86,8 @@ TEST(TextureSpaceParts, LabelsFidelityAndBoundaryOnTheTwoPartSphere) {
         if (p < 0) continue;
         const float* a = maps.tactile_normal.data() + 3 * t;
         const float* b = parts.layers[std::size_t(p)].data() + 3 * t;
-        const Vec3f na = normalize(Vec3f{a[0], a[1], a[2]}), nb = normalize(Vec3f{b[0], b[1], b[2]});
+        const Vec3f na = safe_normalize(Vec3f{a[0], a[1], a[2]});
+        const Vec3f nb = safe_normalize(Vec3f{b[0], b[1], b[2]});
         cosine[std::size_t(p)] += double(dot(na, nb));
         ++count[std::size_t(p)];
     }
