@@ -1008,7 +1008,18 @@ QualityReport Trainer::evaluate_held_out() const {
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] <= 0.0f) continue;
             const float* n = learned.view_normals.data() + 3 * p;
-            const Vec3f target = target_tangent_normal(m_target, g, p);
+            Vec3f target;
+            if (m_target.tactile_target_override) {
+                // Multi-part: the composed target over the atlas, sampled as the learned map is.
+                TrilinearTaps taps;
+                float value[3];
+                m_tactile_target_texture.taps(
+                    g.uv[p], m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]), -1, taps);
+                m_tactile_target_texture.gather(taps, value);
+                target = safe_normalize(Vec3f{value[0], value[1], value[2]});
+            } else {
+                target = target_tangent_normal(m_target, g, p);
+            }
             cosine_sum += cosine_similarity({n[0], n[1], n[2]}, tangent_to_view(g, p, rot, target));
             ++cosine_count;
             learned_tangent.push_back(outputs[q++].normal);
