@@ -7,6 +7,7 @@
 #include <tdf/core/progress.h>
 #include <tdf/guidance/exemplar_patch_match.h>
 #include <tdf/guidance/schedule.h>
+#include <tdf/parts/part_target.h>
 #include <tdf/optim/checkpoint.h>
 #include <tdf/render/scene_assets.h>
 #include <tdf/tactile/tactile_map.h>
@@ -137,6 +138,40 @@ const Json& section(const SceneDescription& d, const char* name) {
 
 }  // namespace
 
+PartTraining prepare_part_training(const SceneDescription& description, const TriangleMesh& mesh,
+                                   const SurfaceMaterial& material, int size, int gutter, const std::string& where) {
+    PartSegmentationInput input;
+    input.mesh = &mesh;
+    input.atlas = &mesh;  // the trained maps use the mesh's own UVs
+    input.material = &material;
+    input.size = size;
+    input.seed = description.seed;
+    input.where = where;
+    PartTraining parts;
+    parts.segmentation = segment_parts(description.parts, input);
+    parts.labels = dilate_labels(parts.segmentation.texel_part, size, gutter);
+    std::vector<MipTexture> maps;
+    std::vector<PartTactile> tactile;
+    maps.reserve(description.parts.parts.size());
+    for (const PartSpec& p : description.parts.parts) {
+        const TactileMap map = load_tactile_map(p.tactile_images.front());
+        maps.emplace_back(map.normals);
+        float scale = p.layout.repeat;
+        if (p.layout.mode == "physical") {
+            const float mm_per_pixel = p.layout.mm_per_pixel > 0 ? p.layout.mm_per_pixel : map.mm_per_pixel;
+            if (!(mm_per_pixel > 0))
+                throw_error("{}: part '{}': layout.mode is 'physical' but '{}' has no tdf:mm_per_pixel metadata and "
+                            "layout.mm_per_pixel is not set", where, p.name, p.tactile_images.front());
+            scale = physical_tactile_uv_scale(mesh, p.layout.mm_per_unit, map.normals.width(), mm_per_pixel);
+        }
+        tactile.push_back({nullptr, scale});
+    }
+    for (std::size_t p = 0; p < maps.size(); ++p) tactile[p].map = &maps[p];
+    parts.layers = lay_part_maps(tactile, size);
+    parts.target = compose_part_target(parts.labels, size, parts.layers);
+    return parts;
+}
+
 void run_optimize(const OptimizeOptions& options) {
     const SceneDescription description = load_scene(options.scene_path, options.overrides);
     const RunConfig config = RunConfig::from_json(section(description, "optimize"), section(description, "tactile_layout"),
@@ -178,9 +213,33 @@ void run_optimize(const OptimizeOptions& options) {
              options.scene_path, description.seed, config.iterations, config.init_iterations, base);
     log_info("prompt: \"{}\"", target.prompt);
 
+    // Multi-part: the segmentation and the composed target (README "Multi-part textures").
+    std::unique_ptr<PartTraining> parts;
+    std::vector<std::string> exemplar_images = description.tactile_images;
+    if (description.parts.enabled()) {
+        if (config.evaluation != FieldEvaluation::Texture)
+            throw_error("{}: multi-part scenes need field.evaluation=texture (pixel evaluation has no part support)",
+                        options.scene_path);
+        parts = std::make_unique<PartTraining>(prepare_part_training(description, assets->mesh, assets->material,
+                                                                     config.texture_size, config.gutter,
+                                                                     options.scene_path + ": parts"));
+        target.tactile_target_override = &parts->target;
+        target.texel_parts = &parts->segmentation.texel_part;
+        target.part_names = parts->segmentation.part_names;
+        // One tactile backend for the whole object: every part's maps are its exemplars.
+        exemplar_images.clear();
+        for (const PartSpec& p : description.parts.parts)
+            exemplar_images.insert(exemplar_images.end(), p.tactile_images.begin(), p.tactile_images.end());
+        std::string summary;
+        for (std::size_t p = 0; p < parts->segmentation.part_count(); ++p)
+            summary += fmt::format("{}{} {:.1f} %", p ? ", " : "", parts->segmentation.part_names[p],
+                                   100.0 * parts->segmentation.part_fraction[p]);
+        log_info("parts ({}): {}", description.parts.source.kind, summary);
+    }
+
     Trainer trainer(target, config, description.seed);
     auto visual = make_backend(config.guidance_visual, config, description.tactile_images);
-    auto tactile = make_backend(config.guidance_tactile, config, description.tactile_images);
+    auto tactile = make_backend(config.guidance_tactile, config, exemplar_images);
     if (!visual || !tactile)
         log_info("guidance: {}{}; the refinement phase uses the matching terms only for what is disabled",
                  visual ? "" : "visual off ", tactile ? "" : "tactile off");
@@ -219,6 +278,18 @@ void run_optimize(const OptimizeOptions& options) {
 
     // Exports go back to the input's coordinates (the scene may normalise the mesh for training).
     const TriangleMesh export_mesh = assets->export_mesh();
+    // Multi-part: how the learned normal map handles the part boundaries (measure_part_boundary
+    // against each part's own laid map; bleed is meaningful after matching, when the map equals
+    // the composed target; refinement then changes texels everywhere).
+    Json boundary_after_matching;
+    const auto boundary_json = [&](const BakedMaps& m) {
+        const PartBoundaryMeasure b = measure_part_boundary(m.tactile_normal, parts->segmentation.texel_part,
+                                                            parts->segmentation.size, parts->layers);
+        return Json{{"bleed_texels", b.bleed_texels},
+                    {"boundary_step_degrees", b.boundary_step_degrees},
+                    {"hard_cut_step_degrees", b.hard_step_degrees},
+                    {"band_detail_ratio", b.band_detail_ratio}};
+    };
     ProgressReporter progress("optimize", std::size_t(config.iterations), 10);
     // Texture evaluation: a matching iteration fits the grid on texels (no rendering), a
     // refinement iteration renders 8 views and calls guidance: measured about 12x the cost.
@@ -249,13 +320,15 @@ void run_optimize(const OptimizeOptions& options) {
         }
         if (done == config.init_iterations && config.init_iterations < config.iterations) {
             progress.finish();
-            write_asset(options.output_dir, name, "_initialized", trainer.export_maps(), export_mesh, config);
+            const BakedMaps matched_maps = trainer.export_maps();
+            write_asset(options.output_dir, name, "_initialized", matched_maps, export_mesh, config);
             // The quality measure is taken here, after the matching phase.
             const QualityReport matched = trainer.evaluate_held_out();
             Json initialized = {{"quality", matched.to_json()}, {"iteration", done}};
             if (const Json texture = texture_space_quality(trainer); !texture.is_null())
                 initialized["texture_space"] = texture;
             write_text_atomically(base + "_initialized_report.json", initialized.dump(2) + "\n");
+            if (parts) boundary_after_matching = boundary_json(matched_maps);
             log_info("after matching: albedo PSNR {:.2f} dB (held-out views, foreground), tactile mean cosine {:.4f}",
                      matched.albedo_psnr_foreground, matched.tactile_mean_cosine);
         }
@@ -281,6 +354,27 @@ void run_optimize(const OptimizeOptions& options) {
                          {"seed", description.seed},
                          {"threads", ThreadLimit::current()}};
     if (const Json texture = texture_space_quality(trainer); !texture.is_null()) report["texture_space"] = texture;
+    if (parts) {
+        // The label head's prediction at the texels (the exported label map) and the segmentation's.
+        const PartSegmentation& seg = parts->segmentation;
+        const std::vector<int> predicted = trainer.predicted_texel_parts();
+        Json part_report = seg.report(description.parts);
+        part_report["label_head_trained"] = trainer.trains_labels();
+        part_report["legend"] = write_part_maps(base, predicted, seg.size, seg.part_names, config.gutter);
+        part_report["segmentation_legend"] =
+            write_part_maps(base + "_segmentation", seg.texel_part, seg.size, seg.part_names, config.gutter);
+        std::size_t agree = 0, labelled = 0;
+        for (std::size_t t = 0; t < predicted.size(); ++t)
+            if (seg.texel_part[t] >= 0) ++labelled, agree += predicted[t] == seg.texel_part[t];
+        part_report["label_agreement"] = labelled ? double(agree) / double(labelled) : 0.0;
+        if (config.init_iterations == config.iterations) boundary_after_matching = boundary_json(maps);
+        if (!boundary_after_matching.is_null()) part_report["boundary_after_matching"] = boundary_after_matching;
+        part_report["boundary_final"] = boundary_json(maps);
+        report["parts"] = part_report;
+        log_info("parts: label map agrees with the segmentation on {:.2f} % of covered texels; {}_label_map.png, "
+                 "{}_label_legend.json, {}_mask_<part>.png",
+                 100.0 * part_report["label_agreement"].get<double>(), name, name, name);
+    }
     write_text_atomically(base + "_report.json", report.dump(2) + "\n");
     log_info("held-out quality: albedo PSNR {:.2f} dB (foreground), tactile mean cosine {:.4f}; report in {}_report.json",
              quality.albedo_psnr_foreground, quality.tactile_mean_cosine, base);

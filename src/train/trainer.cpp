@@ -35,6 +35,8 @@ double seconds_since(Clock::time_point start) {
 constexpr std::uint64_t kHeldOutStream = 0x68656c646f7574ULL;
 // Pixels per chunk in parallel per-pixel loops (writes are disjoint; only grain matters).
 constexpr std::size_t kPixelGrain = 4096;
+// Weight of the label cross-entropy (multi-part): the reference's lambda_label_field.
+constexpr float kLabelWeight = 1.0f;
 
 ViewRotation view_rotation(const Camera& c) { return {c.right, c.up, c.back}; }
 
@@ -116,6 +118,18 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
     FieldConfig field_config;
     field_config.input = config.field_raw_coordinates ? FieldInput::RawWrapped : FieldInput::BoundingBox;
     field_config.grid.log2_table_size = config.table_log2;
+    const bool parts = target.texel_parts != nullptr;
+    if (parts) {
+        if (!texture_space())
+            throw_error("multi-part scenes need field.evaluation=texture (the part labels and the composed tactile "
+                        "target live on the UV atlas); pixel evaluation with parts is not supported");
+        TDF_CHECK(target.tactile_target_override && target.part_names.size() >= 2);
+        m_train_labels = target.part_names.size() == 2;
+        if (!m_train_labels)
+            log_warning("{} parts: the label head has 2 logits, so it is not trained; the label map is the "
+                        "segmentation's", target.part_names.size());
+    }
+    field_config.labels = m_train_labels;
     m_field = std::make_unique<TextureField>(field_config, FieldDomain{bounds.lower, bounds.upper}, seed);
     AdamHyperparams hyper;
     hyper.learning_rate = config.learning_rate;
@@ -127,7 +141,17 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
                         target.mesh->source_path);
         m_atlas = std::make_unique<TexelAtlas>(TexelAtlas::build(*target.mesh, config.texture_size));
         m_albedo_target = tdf::albedo_target(*m_atlas, *target.material, *target.mesh);
-        m_tactile_target = tdf::tactile_target(*m_atlas, *target.material);
+        if (parts) {
+            const int size = config.texture_size;
+            if (target.tactile_target_override->width() != size || target.tactile_target_override->height() != size ||
+                target.tactile_target_override->channels() != 3 ||
+                target.texel_parts->size() != std::size_t(size) * std::size_t(size))
+                throw_error("multi-part: the composed tactile target and the part labels must be {0}x{0} "
+                            "(optimize.texture_size)", size);
+            m_tactile_target = *target.tactile_target_override;
+        } else {
+            m_tactile_target = tdf::tactile_target(*m_atlas, *target.material);
+        }
         m_albedo_target_texture = MipTexture(m_albedo_target);
         m_tactile_target_texture = MipTexture(m_tactile_target);
         m_maps = std::make_unique<LearnedMaps>(*m_atlas);
@@ -217,6 +241,18 @@ BakedMaps Trainer::export_maps() const {
     maps.tactile_normal = m_maps->export_normal();
     maps.raster = m_atlas->raster;
     return maps;
+}
+
+std::vector<int> Trainer::predicted_texel_parts() const {
+    if (!m_target.texel_parts) return {};
+    if (!m_train_labels) return *m_target.texel_parts;
+    const TexelAtlas& atlas = *m_atlas;
+    std::vector<FieldOutputs> outputs(atlas.covered_count());
+    m_field->evaluate(atlas.points.data(), atlas.points.size(), outputs.data());
+    std::vector<int> labels(atlas.texel_count(), -1);
+    for (std::size_t k = 0; k < outputs.size(); ++k)
+        labels[atlas.texels[k]] = outputs[k].label[1] > outputs[k].label[0] ? 1 : 0;
+    return labels;
 }
 
 // What iteration i computes: the phase table of spec 5.1 (i is the 0-based loop index).
@@ -332,9 +368,16 @@ LossRecord Trainer::fit_maps(int i) {
     b.grads.assign(n, FieldOutputGrads{});
 
     const float wa = cfg.weights.texture_albedo, wt = cfg.weights.texture_tactile;
-    std::vector<double> partial(chunk_count(n, kPixelGrain) * 2, 0.0);
+    // Multi-part: cross-entropy of the label head against the known part of each texel, weight
+    // 1 (the reference's lambda_label_field), mean over the picked texels that have a part.
+    const std::vector<int>* parts = m_train_labels ? m_target.texel_parts : nullptr;
+    std::size_t labelled = 0;
+    if (parts)
+        for (std::size_t k = 0; k < n; ++k) labelled += (*parts)[atlas.texels[picked[k]]] >= 0;
+    const float wl_n = labelled > 0 ? kLabelWeight / float(labelled) : 0.0f;
+    std::vector<double> partial(chunk_count(n, kPixelGrain) * 3, 0.0);
     parallel_for(n, kPixelGrain, [&](std::size_t begin, std::size_t end) {
-        double albedo_sum = 0, tactile_sum = 0;
+        double albedo_sum = 0, tactile_sum = 0, label_sum = 0;
         for (std::size_t k = begin; k < end; ++k) {
             const std::size_t t = atlas.texels[picked[k]];
             const float* ta = m_albedo_target.data() + 3 * t;
@@ -347,18 +390,36 @@ LossRecord Trainer::fit_maps(int i) {
             const Vec3f p = b.outputs[k].normal;  // unit
             tactile_sum += 1.0 - double(dot(p, target_normal));
             b.grads[k].d_normal = normalize_backward(p, target_normal * (-wt / float(n)), 1e-12f);
+            const int part = parts ? (*parts)[t] : -1;
+            if (part >= 0) {
+                // Two-class softmax cross-entropy: d/dz_c = softmax_c - [c == part].
+                const float* z = b.outputs[k].label;
+                const float m = std::max(z[0], z[1]);
+                const float e0 = std::exp(z[0] - m), e1 = std::exp(z[1] - m);
+                const float p0 = e0 / (e0 + e1);
+                const float probability[2] = {p0, 1.0f - p0};
+                label_sum += double(m - z[part]) + std::log(double(e0) + double(e1));
+                for (int c = 0; c < 2; ++c)
+                    b.grads[k].d_label[c] = wl_n * (probability[c] - (c == part ? 1.0f : 0.0f));
+            }
         }
         const std::size_t c = begin / kPixelGrain;
-        partial[2 * c] = albedo_sum;
-        partial[2 * c + 1] = tactile_sum;
+        partial[3 * c] = albedo_sum;
+        partial[3 * c + 1] = tactile_sum;
+        partial[3 * c + 2] = label_sum;
     });
-    double albedo_sum = 0, tactile_sum = 0;
-    for (std::size_t c = 0; c < partial.size() / 2; ++c) albedo_sum += partial[2 * c], tactile_sum += partial[2 * c + 1];
+    double albedo_sum = 0, tactile_sum = 0, label_sum = 0;
+    for (std::size_t c = 0; c < partial.size() / 3; ++c)
+        albedo_sum += partial[3 * c], tactile_sum += partial[3 * c + 1], label_sum += partial[3 * c + 2];
     LossRecord record;
     record.iteration = i;
     record.terms["texture_albedo"] = wa * albedo_sum / (3.0 * double(n));
     record.terms["texture_tactile"] = wt * tactile_sum / double(n);
     record.terms["total"] = record.terms["texture_albedo"] + record.terms["texture_tactile"];
+    if (parts) {
+        record.terms["texture_label"] = double(kLabelWeight) * label_sum / double(std::max<std::size_t>(labelled, 1));
+        record.terms["total"] += record.terms["texture_label"];
+    }
     for (const auto& [name, value] : record.terms)
         if (!std::isfinite(value))
             throw_error("iteration {}: loss term '{}' is not finite ({}); the field was not updated", i, name, value);
@@ -963,7 +1024,18 @@ QualityReport Trainer::evaluate_held_out() const {
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] <= 0.0f) continue;
             const float* n = learned.view_normals.data() + 3 * p;
-            const Vec3f target = target_tangent_normal(m_target, g, p);
+            Vec3f target;
+            if (m_target.tactile_target_override) {
+                // Multi-part: the composed target over the atlas, sampled as the learned map is.
+                TrilinearTaps taps;
+                float value[3];
+                m_tactile_target_texture.taps(
+                    g.uv[p], m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]), -1, taps);
+                m_tactile_target_texture.gather(taps, value);
+                target = safe_normalize(Vec3f{value[0], value[1], value[2]});
+            } else {
+                target = target_tangent_normal(m_target, g, p);
+            }
             cosine_sum += cosine_similarity({n[0], n[1], n[2]}, tangent_to_view(g, p, rot, target));
             ++cosine_count;
             learned_tangent.push_back(outputs[q++].normal);

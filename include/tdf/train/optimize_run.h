@@ -1,7 +1,9 @@
 #pragma once
 /// `tdf optimize` as a library call: load the scene, train, checkpoint, export. Everything a
 /// run writes goes under `output_dir` (README "tdf optimize" lists the files).
+#include <tdf/core/image.h>
 #include <tdf/mesh/triangle_mesh.h>
+#include <tdf/parts/part_segmentation.h>
 #include <tdf/scene/scene_file.h>
 
 #include <string>
@@ -27,6 +29,20 @@ struct OptimizeOptions {
 /// triangulated, ...); else the input's one named node / OBJ object; else the mesh's folder
 /// name (the reference, spec 1.1); else "object".
 std::string object_name_for_prompt(const SceneDescription& description, const TriangleMesh& mesh);
+
+/// What a multi-part scene gives the trainer (README "Multi-part textures"): the segmentation
+/// at the map size, its labels grown `gutter` texels into the empty atlas, each part's tactile
+/// map laid over the whole atlas with its layout, and the composed target (TrainingTarget).
+struct PartTraining {
+    PartSegmentation segmentation;
+    std::vector<int> labels;    ///< dilate_labels(segmentation.texel_part, size, gutter)
+    std::vector<Image> layers;  ///< lay_part_maps, one per part
+    Image target;               ///< compose_part_target(labels, size, layers)
+};
+/// Segments `mesh` (which has UVs: the trained atlas) into the scene's parts at `size` texels
+/// and composes the target. Throws tdf::Error naming `where` on bad input.
+PartTraining prepare_part_training(const SceneDescription& description, const TriangleMesh& mesh,
+                                   const SurfaceMaterial& material, int size, int gutter, const std::string& where);
 
 /// Runs the whole job; throws tdf::Error on bad input or a failed run (the last good
 /// checkpoint stays on disk and the message says how to resume).

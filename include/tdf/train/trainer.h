@@ -43,6 +43,18 @@ struct TrainingTarget {
     const EmbreeScene* scene = nullptr;     ///< built from `mesh`
     const SurfaceMaterial* material = nullptr;  ///< base albedo source + tactile map (decoded)
     std::string prompt;                     ///< visual guidance text (spec 5.7)
+    /// Multi-part scenes (README "Multi-part textures"; texture evaluation only, the trainer
+    /// refuses pixel evaluation with parts). All three are set together or not at all.
+    /// The composed tactile target over the atlas (texture_size x texture_size, 3 channels, unit
+    /// normals in [-1, 1], compose_part_target): used instead of tactile_target(); one normal
+    /// map holds all parts.
+    const Image* tactile_target_override = nullptr;
+    /// Per atlas texel (i * size + j), the ground-truth part, -1 where no face covers the texel
+    /// (PartSegmentation::texel_part). With exactly 2 parts the field's label head is trained on
+    /// them by cross-entropy during the matching phase; with more parts it is not (the head has 2
+    /// logits) and predicted_texel_parts() returns these labels.
+    const std::vector<int>* texel_parts = nullptr;
+    std::vector<std::string> part_names;
 };
 
 /// How many patch pixels one texel of the tactile map spans on the surface: the patch window
@@ -134,6 +146,12 @@ public:
     const TexelAtlas* texel_atlas() const { return m_atlas.get(); }
     const Image& albedo_target() const { return m_albedo_target; }
     const Image& tactile_target() const { return m_tactile_target; }
+    /// Multi-part: the part the label head predicts (argmax of its logits at each covered
+    /// texel's surface point), -1 at uncovered texels; size x size. With more than 2 parts (no
+    /// trained head) the given labels. Empty without parts.
+    std::vector<int> predicted_texel_parts() const;
+    /// Whether the label head is trained (multi-part with exactly 2 parts).
+    bool trains_labels() const { return m_train_labels; }
 
     /// Albedo PSNR and tactile cosine on views and patches drawn from a stream no training
     /// iteration uses.
@@ -188,6 +206,7 @@ private:
     std::unique_ptr<Adam> m_residual_adam;
     std::vector<float> m_residual_gradient;
     bool m_maps_ready = false;
+    bool m_train_labels = false;
     std::unique_ptr<GuidanceBackend> m_visual_guidance;
     std::unique_ptr<GuidanceBackend> m_tactile_guidance;
     std::unique_ptr<Batch> m_batch;
