@@ -45,6 +45,7 @@ Json stats_json(const ChannelStats& s) {
 }
 
 int run_compare(const CompareCliOptions& o) {
+    if (!o.diff.empty()) check_output_extension(o.diff, {".exr"}, "--diff (a multi-layer float image)");
     const std::vector<ExrLayer> a = read_layers(o.a);
     const std::vector<ExrLayer> b = read_layers(o.b);
     const Image& ia = a.front().image;

@@ -1,4 +1,6 @@
 // `tdf render scene.json -o out/ [key=value ...]`: one multi-layer EXR per view.
+#include <tdf/scene/scene_file.h>
+
 #include "commands.h"
 
 #include <tdf/core/atomic_file.h>
@@ -73,8 +75,8 @@ Command register_render(CLI::App& root) {
     app->add_option("-o,--output", options->output, "output folder")->required();
     app->add_flag("--png", options->png, "also write 8-bit PNG previews view_NNN_<pass>.png")->capture_default_str();
     app->add_option("--turntable", options->turntable,
-                    "replace the scene's views by N azimuths 360k/N at views.turntable.elevation")
-        ->check(CLI::NonNegativeNumber)
+                    "replace the scene's views by N azimuths 360k/N at views.turntable.elevation (at most 10000)")
+        ->check(CLI::Range(0, kMaxSceneViews))
         ->capture_default_str();
     command.app = app;
     command.run = [options] { return run_render(*options); };

@@ -110,8 +110,8 @@ struct PatchArgs {
                         "contact: raw height above which the sensor touches (mm)")
             ->capture_default_str();
         app->add_option(
-               "--patch-size", options.size, "patch side after resampling in pixels (0 = keep the crop)")
-            ->check(CLI::NonNegativeNumber)
+               "--patch-size", options.size, "patch side after resampling in pixels (0 = keep the crop), at most 4096")
+            ->check(CLI::Range(0, 4096))
             ->capture_default_str();
     }
     PatchOptions resolved() const {
@@ -135,8 +135,8 @@ struct QuiltArgs {
         options.tileable = convert_defaults;
         if (convert_defaults) options.min_contrast = 0.5f, options.feather = 2;
         app->add_option(
-               "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride)")
-            ->check(CLI::PositiveNumber)
+               "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride), at most 8192")
+            ->check(CLI::Range(1, 8192))
             ->capture_default_str();
         app->add_option("--block", options.block, "block side in pixels")
             ->check(CLI::PositiveNumber)

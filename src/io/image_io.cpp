@@ -48,6 +48,37 @@ FilePtr open_file(const std::string& path, const char* mode) {
     return f;
 }
 
+// Decoded images are checked against kMaxImageSide / kMaxImagePixels and against the file size
+// before any pixel buffer is allocated: a 60-byte PNG header may claim 200000 x 200000 pixels.
+// The codecs' densest encodings stay below ~2000 decoded bytes per file byte (DEFLATE's limit
+// is 1032:1; a JPEG block costs at least one bit per 64 samples; EXR's PIZ run codes, counted
+// in half-float bytes, about 2000:1), so a header claiming more than 4096:1 is a truncated,
+// corrupt or hostile file and is refused before it costs memory.
+constexpr double kMaxDecodedBytesPerFileByte = 4096.0;
+
+std::uintmax_t file_size_or_zero(const std::string& path) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    return ec ? 0 : size;
+}
+
+// `decoded_bytes`: the size of the codec's decoded stream (PNG: filtered rows, JPEG: samples,
+// EXR: half-float samples).
+void check_image_size(const std::string& path, const char* format, std::uint64_t width, std::uint64_t height,
+                      double decoded_bytes) {
+    if (width == 0 || height == 0)
+        throw_error("cannot read {} '{}': the image is empty ({}x{})", format, path, width, height);
+    if (width > std::uint64_t(kMaxImageSide) || height > std::uint64_t(kMaxImageSide) ||
+        width * height > std::uint64_t(kMaxImagePixels))
+        throw_error("cannot read {} '{}': {}x{} pixels is over the limit ({} per side, {} in all)", format, path,
+                    width, height, kMaxImageSide, kMaxImagePixels);
+    const double file = double(file_size_or_zero(path));
+    if (decoded_bytes > kMaxDecodedBytesPerFileByte * file + 65536.0)
+        throw_error("cannot read {} '{}': the header claims {}x{} pixels but the file has only {} bytes "
+                    "(truncated or corrupt)",
+                    format, path, width, height, std::uint64_t(file));
+}
+
 // ---- PNG -------------------------------------------------------------------------------------
 
 struct PngErrorContext {
@@ -81,6 +112,12 @@ Image read_png(const std::string& path, ImageMetadata* metadata = nullptr) {
     const png_uint_32 height = png_get_image_height(png, info);
     const int color_type = png_get_color_type(png, info);
     int bit_depth = png_get_bit_depth(png, info);
+    try {
+        check_image_size(path, "PNG", width, height, double(png_get_rowbytes(png, info) + 1) * double(height));
+    } catch (...) {
+        png_destroy_read_struct(&png, &info, nullptr);
+        throw;
+    }
     if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
     if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
     if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
@@ -201,6 +238,13 @@ Image read_jpeg(const std::string& path) {
     jpeg_stdio_src(&cinfo, file.get());
     jpeg_read_header(&cinfo, TRUE);
     if (cinfo.num_components != 1) cinfo.out_color_space = JCS_RGB;
+    try {
+        check_image_size(path, "JPEG", cinfo.image_width, cinfo.image_height,
+                         double(cinfo.image_width) * double(cinfo.image_height) * double(cinfo.num_components));
+    } catch (...) {
+        jpeg_destroy_decompress(&cinfo);
+        throw;
+    }
     jpeg_start_decompress(&cinfo);
     const int width = int(cinfo.output_width), height = int(cinfo.output_height);
     const int channels = int(cinfo.output_components);
@@ -214,6 +258,42 @@ Image read_jpeg(const std::string& path) {
     Image image(width, height, channels);
     for (std::size_t i = 0; i < buffer.size(); ++i) image.data()[i] = float(buffer[i]) / 255.0f;
     return image;
+}
+
+void write_jpeg_file(const std::string& path, const Image& image, int quality) {
+    FilePtr file = open_file(path, "wb");
+    jpeg_compress_struct cinfo;
+    JpegError err;
+    cinfo.err = jpeg_std_error(&err.base);
+    err.base.error_exit = jpeg_error_exit;
+    // No locals live across setjmp other than these (gcc's -Wclobbered).
+    std::vector<unsigned char> row(std::size_t(image.width()) * 3);
+    if (setjmp(err.jump)) {
+        jpeg_destroy_compress(&cinfo);
+        throw_error("cannot write JPEG '{}': {}", path, err.message);
+    }
+    jpeg_create_compress(&cinfo);
+    jpeg_stdio_dest(&cinfo, file.get());
+    cinfo.image_width = JDIMENSION(image.width());
+    cinfo.image_height = JDIMENSION(image.height());
+    cinfo.input_components = image.channels() >= 3 ? 3 : 1;
+    cinfo.in_color_space = cinfo.input_components == 3 ? JCS_RGB : JCS_GRAYSCALE;
+    jpeg_set_defaults(&cinfo);
+    jpeg_set_quality(&cinfo, quality, TRUE);
+    jpeg_start_compress(&cinfo, TRUE);
+    while (cinfo.next_scanline < cinfo.image_height) {
+        const int y = int(cinfo.next_scanline);
+        for (int x = 0; x < image.width(); ++x)
+            for (int c = 0; c < cinfo.input_components; ++c)
+                row[std::size_t(x * cinfo.input_components + c)] =
+                    static_cast<unsigned char>(quantize_value(image.at(x, y, c), 255.0f, Quantize::Round));
+        JSAMPROW pointer = row.data();
+        jpeg_write_scanlines(&cinfo, &pointer, 1);
+    }
+    jpeg_finish_compress(&cinfo);
+    jpeg_destroy_compress(&cinfo);
+    if (std::fflush(file.get()) != 0 || std::ferror(file.get()))
+        throw_error("cannot write JPEG '{}': {} (disk full?)", path, std::strerror(errno));
 }
 
 // ---- EXR -------------------------------------------------------------------------------------
@@ -279,8 +359,19 @@ void write_png(const std::string& path, const Image& image, int bits, Quantize q
     write_png(path, image, ImageMetadata{}, bits, quantize);
 }
 
+void check_output_extension(const std::string& path, const std::vector<std::string>& extensions,
+                            const std::string& what) {
+    const std::string ext = lower_extension(path);
+    if (std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) return;
+    std::string list;
+    for (const auto& e : extensions) list += (list.empty() ? "" : ", ") + e;
+    throw_error("{}: {} must be named {} (the extension chooses the format), got '{}'", path, what, list,
+                ext.empty() ? "no extension" : ext);
+}
+
 void write_png(const std::string& path, const Image& image, const ImageMetadata& metadata, int bits,
                Quantize quantize) {
+    check_output_extension(path, {".png"}, "a PNG file");
     for (const auto& entry : metadata)
         if (entry.first.empty() || entry.first.size() > 79)
             throw_error("cannot write PNG '{}': metadata key '{}' must have 1 to 79 characters", path, entry.first);
@@ -291,10 +382,31 @@ void write_png(const std::string& path, const Image& image, const ImageMetadata&
     write_atomically(path, [&](const std::string& tmp) { write_png_file(tmp, image, bits, quantize, metadata); });
 }
 
+void write_jpeg(const std::string& path, const Image& image, int quality) {
+    check_output_extension(path, {".jpg", ".jpeg"}, "a JPEG file");
+    if (quality < 1 || quality > 100) throw_error("cannot write JPEG '{}': quality must be in 1..100, got {}", path, quality);
+    if (image.empty() || image.channels() < 1 || image.channels() > 4)
+        throw_error("cannot write JPEG '{}': the image is empty or has {} channels (1 to 4 supported)", path,
+                    image.channels());
+    write_atomically(path, [&](const std::string& tmp) { write_jpeg_file(tmp, image, quality); });
+}
+
+void write_image(const std::string& path, const Image& image, int png_bits, Quantize quantize) {
+    check_output_extension(path, {".png", ".jpg", ".jpeg", ".exr"}, "an image");
+    const std::string ext = lower_extension(path);
+    if (ext == ".png")
+        write_png(path, image, png_bits, quantize);
+    else if (ext == ".exr")
+        write_exr(path, image);
+    else
+        write_jpeg(path, image);
+}
+
 namespace {
 
 void write_exr_file(const std::string& path, const std::vector<ExrLayer>& layers, ExrPixelType type,
                     const ImageMetadata& metadata) {
+    check_output_extension(path, {".exr"}, "an OpenEXR file");
     if (layers.empty()) throw_error("cannot write EXR '{}': no layers", path);
     const int width = layers[0].image.width(), height = layers[0].image.height();
     if (width <= 0 || height <= 0) throw_error("cannot write EXR '{}': the image is empty", path);
@@ -360,14 +472,34 @@ void write_exr(const std::string& path, const Image& image, const ImageMetadata&
 std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* metadata) {
     if (!std::filesystem::exists(path)) throw_error("cannot open '{}': no such file", path);
     try {
+        // OpenEXR itself refuses larger data windows while reading the header, before it
+        // allocates its line-offset table.
+        static const bool limited = [] {
+            Imf::Header::setMaxImageSize(kMaxImageSide, kMaxImageSide);
+            Imf::Header::setMaxTileSize(kMaxImageSide, kMaxImageSide);
+            return true;
+        }();
+        (void)limited;
         Imf::InputFile file(path.c_str());
         const Imath::Box2i window = file.header().dataWindow();
         if (metadata)
             for (auto it = file.header().begin(); it != file.header().end(); ++it)
                 if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
                     (*metadata)[it.name()] = text->value();
-        const int width = window.max.x - window.min.x + 1;
-        const int height = window.max.y - window.min.y + 1;
+        const std::int64_t wide_width = std::int64_t(window.max.x) - window.min.x + 1;
+        const std::int64_t wide_height = std::int64_t(window.max.y) - window.min.y + 1;
+        if (wide_width <= 0 || wide_height <= 0)
+            throw_error("cannot read EXR '{}': empty data window", path);
+        std::size_t channel_count = 0;
+        for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {
+            if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
+                throw_error("cannot read EXR '{}': subsampled channel '{}' is not supported", path, it.name());
+            ++channel_count;
+        }
+        if (channel_count == 0) throw_error("cannot read EXR '{}': the file has no channels", path);
+        check_image_size(path, "EXR", std::uint64_t(wide_width), std::uint64_t(wide_height),
+                         2.0 * double(wide_width) * double(wide_height) * double(channel_count));
+        const int width = int(wide_width), height = int(wide_height);
         std::map<std::string, std::vector<std::string>> layer_channels;  // layer -> channel suffixes
         std::vector<std::string> layer_order;
         for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {

@@ -14,6 +14,7 @@
 
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -65,6 +66,20 @@ double determinant3(const Mat4d& m) {
            m[8] * (m[1] * m[6] - m[5] * m[2]);
 }
 
+const char* component_type_name(int type) {
+    switch (type) {
+        case TINYGLTF_COMPONENT_TYPE_BYTE: return "BYTE";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return "UNSIGNED_BYTE";
+        case TINYGLTF_COMPONENT_TYPE_SHORT: return "SHORT";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return "UNSIGNED_SHORT";
+        case TINYGLTF_COMPONENT_TYPE_INT: return "INT";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return "UNSIGNED_INT";
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: return "FLOAT";
+        case TINYGLTF_COMPONENT_TYPE_DOUBLE: return "DOUBLE";
+        default: return "unknown";
+    }
+}
+
 class GltfReader {
 public:
     GltfReader(const tinygltf::Model& model, const std::string& path) : m_model(model), m_path(path) {}
@@ -76,10 +91,20 @@ public:
         const int have = tinygltf::GetNumComponentsInType(std::uint32_t(a.type));
         if (have < components || have > 4)
             throw_error("{}: {} has {} components per element, expected {}", m_path, what, have, components);
-        std::vector<float> out(a.count * std::size_t(components));
+        // glTF 2.0 (3.7.2.1): POSITION is FLOAT; TEXCOORD_n and COLOR_n are FLOAT or normalized
+        // UNSIGNED_BYTE / UNSIGNED_SHORT. Anything else is a broken or quantized file we would
+        // otherwise read as wrong numbers.
+        const bool is_float = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT;
+        const bool normalized_integer = a.normalized && (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                                         a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+        if (!is_float && (std::strcmp(what, "POSITION") == 0 || !normalized_integer))
+            throw_error("{}: {} has component type {}{}, expected FLOAT{}", m_path, what,
+                        component_type_name(a.componentType), a.normalized ? " (normalized)" : "",
+                        std::strcmp(what, "POSITION") == 0 ? "" : " or normalized UNSIGNED_BYTE/UNSIGNED_SHORT");
         const unsigned char* base = nullptr;
         std::size_t stride = 0;
-        data(a, what, base, stride);
+        data(a, what, base, stride);  // bounds-checks the count against the buffer before allocating
+        std::vector<float> out(a.count * std::size_t(components));
         for (std::size_t i = 0; i < a.count; ++i)
             for (int c = 0; c < components; ++c) {
                 const unsigned char* p = base + i * stride + std::size_t(c) * component_size(a);
@@ -153,7 +178,14 @@ private:
                             tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType));
         if (element <= 0) throw_error("{}: {} has an invalid type", m_path, what);
         stride = view.byteStride ? view.byteStride : std::size_t(element);
+        // In 64-bit arithmetic that cannot wrap: every term is bounded by the buffer size first.
+        const std::size_t size = buffer.size();
+        if (view.byteOffset > size || a.byteOffset > size || view.byteLength > size || stride > size)
+            throw_error("{}: {} reads past the end of its buffer (truncated file?)", m_path, what);
         const std::size_t start = view.byteOffset + a.byteOffset;
+        if (a.count > 0 && (a.count - 1 > size / std::max<std::size_t>(stride, 1) ||
+                            start + (a.count - 1) * stride + std::size_t(element) > size))
+            throw_error("{}: {} has {} elements, more than its buffer holds (truncated file?)", m_path, what, a.count);
         const std::size_t end = a.count == 0 ? start : start + (a.count - 1) * stride + std::size_t(element);
         if (end > buffer.size() || end > view.byteOffset + view.byteLength)
             throw_error("{}: {} reads past the end of its buffer (truncated file?)", m_path, what);

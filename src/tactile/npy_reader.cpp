@@ -169,6 +169,10 @@ std::uint64_t u64(const std::string& s, std::size_t at) {
 }
 
 std::string inflate_raw(const std::string& compressed, std::uint64_t size, const std::string& where) {
+    // DEFLATE expands at most 1032:1; a larger claimed size is a corrupt header, refused before
+    // allocating it.
+    if (size > 1032 * std::uint64_t(compressed.size()) + 1024)
+        throw_error("{}: uncompressed size {} is impossible for {} compressed bytes", where, size, compressed.size());
     std::string out(size, '\0');
     z_stream stream{};
     if (inflateInit2(&stream, -MAX_WBITS) != Z_OK) throw_error("{}: cannot initialise zlib", where);
@@ -217,8 +221,14 @@ NpyArray parse_npy(const std::string& bytes, const std::string& where) {
     const char kind = d[1];
     const int size = std::atoi(d.c_str() + 2);
     const bool swap = d[0] == '>';
+    // Checked product: shape entries are bounded, their product may not be.
     std::size_t count = 1;
-    for (std::size_t n : array.shape) count *= n;
+    for (std::size_t n : array.shape) {
+        if (n != 0 && count > (bytes.size() + 1) / n)
+            throw_error("{}: shape {} needs more data than the {} bytes present", where,
+                        header_value(header, "shape", where), bytes.size());
+        count *= n;
+    }
     const std::size_t data_start = header_start + header_length;
     if (size <= 0 || size > 8) throw_error("{}: unsupported dtype '{}'", where, d);
     if ((bytes.size() - data_start) / std::size_t(size) < count)
@@ -271,6 +281,7 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
         if (at + 46 > zip.size() || u32(zip, at) != 0x02014b50u)
             throw_error("{}: corrupt zip directory", path);
         const std::uint16_t method = u16(zip, at + 10);
+        const std::uint32_t crc = u32(zip, at + 16);
         std::uint64_t compressed = u32(zip, at + 20), uncompressed = u32(zip, at + 24);
         const std::size_t name_length = u16(zip, at + 28), extra_length = u16(zip, at + 30),
                           comment_length = u16(zip, at + 32);
@@ -304,6 +315,10 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
         } else if (compressed != uncompressed) {
             throw_error("{}: corrupt zip entry sizes", where);
         }
+        const std::uint32_t actual =
+            std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(member.data()), uInt(member.size())));
+        if (actual != crc)
+            throw_error("{}: CRC mismatch (stored {:08x}, computed {:08x}): the archive is corrupt", where, crc, actual);
         std::string key = name;
         if (key.size() > 4 && key.compare(key.size() - 4, 4, ".npy") == 0) key.resize(key.size() - 4);
         arrays[key] = parse_npy(member, where);
