@@ -121,14 +121,16 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         if (e.get_exit_code() == 0) return root.exit(e);  // --help, --version
         const std::string path = command_path(root);
+        const std::string command = path.substr(0, path.find(' '));
         std::string message = shorten_numbers(e.what());
         std::replace(message.begin(), message.end(), '\n', ' ');
-        std::fprintf(stderr, "tdf%s%s: %s (see `tdf help%s%s`)\n", path.empty() ? "" : " ", path.c_str(),
+        std::fprintf(stderr, "tdf%s%s: %s (see `tdf help%s%s`)\n", command.empty() ? "" : " ", command.c_str(),
                      message.c_str(), path.empty() ? "" : " ", path.c_str());
         return 1;
     } catch (const Error& e) {
         const std::string path = command_path(root);
-        std::fprintf(stderr, "tdf %s: %s\n", path.c_str(), e.what());
+        std::fprintf(stderr, "tdf%s%s: %s\n", path.empty() ? "" : " ", path.substr(0, path.find(' ')).c_str(),
+                     e.what());
         return 1;
     }
     if (help->parsed() || argc == 1) {
@@ -154,7 +156,7 @@ int main(int argc, char** argv) {
     ThreadLimit limit(global.threads);
     for (auto& c : commands) {
         if (!c.app->parsed()) continue;
-        const std::string name = command_path(root);
+        const std::string name = c.app->get_name();
         try {
             return c.run();
         } catch (const Error& e) {

@@ -99,6 +99,13 @@ void apply_override(Json& config, const std::string& assignment) {
     const auto eq = assignment.find('=');
     if (eq == std::string::npos || eq == 0)
         throw_error("override '{}' is not of the form key=value", assignment);
+    // JSON text is UTF-8; a bare-string value or key that is not would make every later dump()
+    // of the configuration throw (found by fuzzing).
+    try {
+        (void)Json(assignment).dump();
+    } catch (const nlohmann::json::exception&) {
+        throw_error("override '{}' is not valid UTF-8 text", assignment);
+    }
     const std::string key = assignment.substr(0, eq);
     const std::string text = assignment.substr(eq + 1);
     Json value;

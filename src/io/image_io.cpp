@@ -64,15 +64,15 @@ std::uintmax_t file_size_or_zero(const std::string& path) {
 
 // `decoded_bytes`: the size of the codec's decoded stream (PNG: filtered rows, JPEG: samples,
 // EXR: half-float samples).
-void check_image_size(const std::string& path, const char* format, std::uint64_t width, std::uint64_t height,
-                      double decoded_bytes) {
+void check_image_size(const std::string& path, std::uint64_t file_size, const char* format, std::uint64_t width,
+                      std::uint64_t height, double decoded_bytes) {
     if (width == 0 || height == 0)
         throw_error("cannot read {} '{}': the image is empty ({}x{})", format, path, width, height);
     if (width > std::uint64_t(kMaxImageSide) || height > std::uint64_t(kMaxImageSide) ||
         width * height > std::uint64_t(kMaxImagePixels))
         throw_error("cannot read {} '{}': {}x{} pixels is over the limit ({} per side, {} in all)", format, path,
                     width, height, kMaxImageSide, kMaxImagePixels);
-    const double file = double(file_size_or_zero(path));
+    const double file = double(file_size);
     if (decoded_bytes > kMaxDecodedBytesPerFileByte * file + 65536.0)
         throw_error("cannot read {} '{}': the header claims {}x{} pixels but the file has only {} bytes "
                     "(truncated or corrupt)",
@@ -93,8 +93,8 @@ void png_error_handler(png_structp png, png_const_charp message) {
 }
 void png_warning_handler(png_structp, png_const_charp) {}
 
-Image read_png(const std::string& path, ImageMetadata* metadata = nullptr) {
-    FilePtr file = open_file(path, "rb");
+// `file` holds the image (a file or memory); `path` names it in messages.
+Image read_png(std::FILE* file, const std::string& path, std::uint64_t file_size, ImageMetadata* metadata) {
     PngErrorContext context{path, {}};
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler,
                                              png_warning_handler);
@@ -106,14 +106,14 @@ Image read_png(const std::string& path, ImageMetadata* metadata = nullptr) {
         png_destroy_read_struct(&png, &info, nullptr);
         throw_error("cannot read PNG '{}': {}", path, context.message);
     }
-    png_init_io(png, file.get());
+    png_init_io(png, file);
     png_read_info(png, info);
     const png_uint_32 width = png_get_image_width(png, info);
     const png_uint_32 height = png_get_image_height(png, info);
     const int color_type = png_get_color_type(png, info);
     int bit_depth = png_get_bit_depth(png, info);
     try {
-        check_image_size(path, "PNG", width, height, double(png_get_rowbytes(png, info) + 1) * double(height));
+        check_image_size(path, file_size, "PNG", width, height, double(png_get_rowbytes(png, info) + 1) * double(height));
     } catch (...) {
         png_destroy_read_struct(&png, &info, nullptr);
         throw;
@@ -223,8 +223,7 @@ void jpeg_error_exit(j_common_ptr cinfo) {
     std::longjmp(err->jump, 1);
 }
 
-Image read_jpeg(const std::string& path) {
-    FilePtr file = open_file(path, "rb");
+Image read_jpeg(std::FILE* file, const std::string& path, std::uint64_t file_size) {
     jpeg_decompress_struct cinfo;
     JpegError err;
     cinfo.err = jpeg_std_error(&err.base);
@@ -235,11 +234,11 @@ Image read_jpeg(const std::string& path) {
         throw_error("cannot read JPEG '{}': {}", path, err.message);
     }
     jpeg_create_decompress(&cinfo);
-    jpeg_stdio_src(&cinfo, file.get());
+    jpeg_stdio_src(&cinfo, file);
     jpeg_read_header(&cinfo, TRUE);
     if (cinfo.num_components != 1) cinfo.out_color_space = JCS_RGB;
     try {
-        check_image_size(path, "JPEG", cinfo.image_width, cinfo.image_height,
+        check_image_size(path, file_size, "JPEG", cinfo.image_width, cinfo.image_height,
                          double(cinfo.image_width) * double(cinfo.image_height) * double(cinfo.num_components));
     } catch (...) {
         jpeg_destroy_decompress(&cinfo);
@@ -335,8 +334,14 @@ Image read_image(const std::string& path, ImageMetadata& metadata) {
         FilePtr file = open_file(path, "rb");
         if (std::fread(magic, 1, 4, file.get()) != 4) throw_error("cannot read image '{}': file is too short", path);
     }
-    if (magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') return read_png(path, &metadata);
-    if (magic[0] == 0xFF && magic[1] == 0xD8) return read_jpeg(path);
+    if (magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') {
+        FilePtr file = open_file(path, "rb");
+        return read_png(file.get(), path, file_size_or_zero(path), &metadata);
+    }
+    if (magic[0] == 0xFF && magic[1] == 0xD8) {
+        FilePtr file = open_file(path, "rb");
+        return read_jpeg(file.get(), path, file_size_or_zero(path));
+    }
     if (magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) {
         std::vector<ExrLayer> layers = read_exr_layers(path, &metadata);
         int channels = 0;
@@ -353,6 +358,16 @@ Image read_image(const std::string& path, ImageMetadata& metadata) {
         return out;
     }
     throw_error("cannot read image '{}': not a PNG, JPEG or OpenEXR file", path);
+}
+
+Image decode_image(const std::string& bytes, const std::string& where) {
+    const auto* b = reinterpret_cast<const unsigned char*>(bytes.data());
+    const bool png = bytes.size() >= 4 && b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G';
+    const bool jpeg = bytes.size() >= 2 && b[0] == 0xFF && b[1] == 0xD8;
+    if (!png && !jpeg) throw_error("cannot read image '{}': not a PNG or JPEG", where);
+    FilePtr file(fmemopen(const_cast<char*>(bytes.data()), bytes.size(), "rb"));
+    if (!file) throw_error("cannot read image '{}': {}", where, std::strerror(errno));
+    return png ? read_png(file.get(), where, bytes.size(), nullptr) : read_jpeg(file.get(), where, bytes.size());
 }
 
 void write_png(const std::string& path, const Image& image, int bits, Quantize quantize) {
@@ -497,7 +512,7 @@ std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* me
             ++channel_count;
         }
         if (channel_count == 0) throw_error("cannot read EXR '{}': the file has no channels", path);
-        check_image_size(path, "EXR", std::uint64_t(wide_width), std::uint64_t(wide_height),
+        check_image_size(path, file_size_or_zero(path), "EXR", std::uint64_t(wide_width), std::uint64_t(wide_height),
                          2.0 * double(wide_width) * double(wide_height) * double(channel_count));
         const int width = int(wide_width), height = int(wide_height);
         std::map<std::string, std::vector<std::string>> layer_channels;  // layer -> channel suffixes

@@ -198,11 +198,29 @@ private:
 
 // Keeps the encoded bytes instead of decoding every image (normal and roughness maps are
 // 2048^2 in typical files); only the base colour texture is decoded, after parsing.
+// tinygltf 2.7 passes a bufferView image's bytes without checking the view against its buffer
+// (found by fuzzing: a heap overflow on a .glb whose view runs past the BIN chunk), so those
+// bytes are not touched here; embedded_image_bytes() copies them with bounds checks instead.
 bool keep_encoded_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
                         const unsigned char* bytes, int size, void*) {
-    image->image.assign(bytes, bytes + size);
+    if (image->bufferView < 0 && size > 0) image->image.assign(bytes, bytes + size);
     image->width = image->height = -1;
     return true;
+}
+
+// The bytes of an image stored in a buffer view, bounds-checked.
+void embedded_image_bytes(const tinygltf::Model& model, int view_index, const std::string& path,
+                          const unsigned char*& base, std::size_t& length) {
+    if (view_index < 0 || std::size_t(view_index) >= model.bufferViews.size())
+        throw_error("{}: image buffer view {} does not exist", path, view_index);
+    const tinygltf::BufferView& view = model.bufferViews[std::size_t(view_index)];
+    if (view.buffer < 0 || std::size_t(view.buffer) >= model.buffers.size())
+        throw_error("{}: image buffer view {} has no valid buffer", path, view_index);
+    const std::vector<unsigned char>& buffer = model.buffers[std::size_t(view.buffer)].data;
+    if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
+        throw_error("{}: image buffer view {} reads past the end of its buffer (truncated file?)", path, view_index);
+    base = buffer.data() + view.byteOffset;
+    length = view.byteLength;
 }
 
 Image decode_base_colour(tinygltf::Image& gltf_image, int index, const std::string& path) {
@@ -211,24 +229,17 @@ Image decode_base_colour(tinygltf::Image& gltf_image, int index, const std::stri
         const std::string file = (fs::path(path).parent_path() / gltf_image.uri).string();
         return read_image(file);
     }
-    std::string err, warn;
-    const std::vector<unsigned char> encoded = std::move(gltf_image.image);
-    if (!tinygltf::LoadImageData(&gltf_image, index, &err, &warn, 0, 0, encoded.data(), int(encoded.size()), nullptr))
-        throw_error("{}: cannot decode embedded image {}: {}", path, index, err);
-    const int w = gltf_image.width, h = gltf_image.height, c = gltf_image.component;
-    if (gltf_image.bits != 8 && gltf_image.bits != 16)
-        throw_error("{}: embedded image {} has {} bits per channel", path, index, gltf_image.bits);
-    Image out(w, h, c);
-    const float scale = gltf_image.bits == 8 ? 1.f / 255.f : 1.f / 65535.f;
-    for (std::size_t i = 0; i < out.values().size(); ++i) {
-        if (gltf_image.bits == 8) {
-            out.values()[i] = float(gltf_image.image[i]) * scale;
-        } else {
-            std::uint16_t u;
-            std::memcpy(&u, &gltf_image.image[2 * i], 2);
-            out.values()[i] = float(u) * scale;
+    // Decoded by tdf's own PNG/JPEG reader (size limits checked before allocating), expanded
+    // to RGBA as tinygltf's stb decoder did: grey -> (g, g, g), missing alpha -> 1.
+    const std::string encoded(gltf_image.image.begin(), gltf_image.image.end());
+    const Image decoded = decode_image(encoded, fmt::format("{}#image{}", path, index));
+    const int c = decoded.channels();
+    Image out(decoded.width(), decoded.height(), 4, 1.f);
+    for (int y = 0; y < out.height(); ++y)
+        for (int x = 0; x < out.width(); ++x) {
+            for (int k = 0; k < 3; ++k) out.at(x, y, k) = decoded.at(x, y, c >= 3 ? k : 0);
+            if (c == 2 || c == 4) out.at(x, y, 3) = decoded.at(x, y, c - 1);
         }
-    }
     return out;
 }
 
@@ -378,6 +389,12 @@ TriangleMesh load_gltf(const std::string& path, const MeshLoadOptions& options) 
         if (source < 0 || std::size_t(source) >= model.images.size())
             throw_error("{}: texture {} has no valid image", path, b.base_colour_texture);
         tinygltf::Image& image = model.images[std::size_t(source)];
+        if (image.bufferView >= 0) {
+            const unsigned char* base = nullptr;
+            std::size_t length = 0;
+            embedded_image_bytes(model, image.bufferView, path, base, length);
+            image.image.assign(base, base + length);
+        }
         mesh.albedo = decode_base_colour(image, source, path);
         mesh.albedo_path = image.uri.empty() || image.uri.rfind("data:", 0) == 0
                                ? fmt::format("{}#image{}", path, source)

@@ -26,7 +26,10 @@ namespace {
 class Scratch {
 public:
     Scratch() {
-        m_folder = fs::temp_directory_path() / ("tdf_fuzz_" + std::to_string(getpid()));
+        // Memory-backed when available: the harnesses write one small file per input.
+        std::error_code ec;
+        const fs::path base = fs::is_directory("/dev/shm", ec) ? fs::path("/dev/shm") : fs::temp_directory_path();
+        m_folder = base / ("tdf_fuzz_" + std::to_string(getpid()));
         fs::create_directories(m_folder);
     }
     ~Scratch() {

@@ -199,11 +199,11 @@ std::string npy(const std::string& descr, const std::string& shape, const std::s
 }
 
 // A zip archive of `members` (name, bytes), stored or deflated, with correct CRCs.
-std::string zip(const std::vector<std::pair<std::string, std::string>>& members, bool deflate) {
+std::string zip(const std::vector<std::pair<std::string, std::string>>& members, bool compress) {
     std::string out, directory;
     for (const auto& [name, raw] : members) {
         std::string data = raw;
-        if (deflate) {
+        if (compress) {
             z_stream s{};
             deflateInit2(&s, 9, Z_DEFLATED, -MAX_WBITS, 8, Z_DEFAULT_STRATEGY);
             std::string buffer(deflateBound(&s, uLong(raw.size())), '\0');
@@ -221,7 +221,7 @@ std::string zip(const std::vector<std::pair<std::string, std::string>>& members,
         put(out, std::uint32_t(0x04034b50));
         put(out, std::uint16_t(20));
         put(out, std::uint16_t(0));
-        put(out, std::uint16_t(deflate ? 8 : 0));
+        put(out, std::uint16_t(compress ? 8 : 0));
         put(out, std::uint32_t(0));
         put(out, crc);
         put(out, std::uint32_t(data.size()));
@@ -233,7 +233,7 @@ std::string zip(const std::vector<std::pair<std::string, std::string>>& members,
         put(directory, std::uint16_t(20));
         put(directory, std::uint16_t(20));
         put(directory, std::uint16_t(0));
-        put(directory, std::uint16_t(deflate ? 8 : 0));
+        put(directory, std::uint16_t(compress ? 8 : 0));
         put(directory, std::uint32_t(0));
         put(directory, crc);
         put(directory, std::uint32_t(data.size()));

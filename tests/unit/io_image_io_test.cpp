@@ -173,9 +173,13 @@ TEST(ImageIo, WritersRefuseNamesOfAnotherFormat) {
         write_image(path, img);
         const std::string head = file_bytes(path).substr(0, 4);
         const std::string ext = lower_extension(path);
-        if (ext == ".png") EXPECT_EQ(head.substr(1, 3), "PNG");
-        if (ext == ".jpg" || ext == ".jpeg") EXPECT_EQ(head.substr(0, 2), "\xff\xd8");
-        if (ext == ".exr") EXPECT_EQ(head, std::string("\x76\x2f\x31\x01", 4));
+        if (ext == ".png") {
+            EXPECT_EQ(head.substr(1, 3), "PNG");
+        } else if (ext == ".exr") {
+            EXPECT_EQ(head, std::string("\x76\x2f\x31\x01", 4));
+        } else {
+            EXPECT_EQ(head.substr(0, 2), "\xff\xd8") << name;
+        }
     }
 }
 

@@ -28,6 +28,10 @@ inline constexpr long long kMaxImagePixels = 16384LL * 16384LL;
 /// Throws tdf::Error naming the file for missing, truncated or unsupported files.
 Image read_image(const std::string& path);
 
+/// Decodes a PNG or JPEG held in memory (e.g. embedded in a .glb), with the same value
+/// conventions and size limits as read_image; `where` names it in errors.
+Image decode_image(const std::string& bytes, const std::string& where);
+
 enum class Quantize { Truncate, Round };
 
 /// Key-value text stored with an image: PNG tEXt chunks (keys of 1-79 Latin-1 characters) or
