@@ -269,9 +269,17 @@ void run_quilt(const State& s) {
     log_info("wrote {} ({}x{})", s.out, quilted.height.width(), quilted.height.height());
 }
 
-void run_normal(const State& s) { s.normal.write(s.out, s.input.load(s.in).map); }
+void require_normal_map_name(const std::string& path) {
+    check_output_extension(path, {".png", ".exr"}, "a normal map (-o)");
+}
+
+void run_normal(const State& s) {
+    require_normal_map_name(s.out);
+    s.normal.write(s.out, s.input.load(s.in).map);
+}
 
 void run_convert(const State& s) {
+    require_normal_map_name(s.out);
     if (s.no_quilt && s.inputs.size() > 1)
         throw_error("--no-quilt makes a normal map of one patch, but {} inputs were given", s.inputs.size());
     const PatchOptions patch_options = s.patch.resolved();

@@ -45,17 +45,17 @@ check(1 "^tdf help: 'tdf tactile' has no command 'bogus'" "" ${TDF} help tactile
 # Usage errors: one line naming the command, exit 1 (README "Errors"), not CLI11's 105-109.
 check(1 "^tdf render: .*--bogus" "" ${TDF} render ${_scene} -o ${OUT_DIR}/x --bogus)
 check(1 "^tdf render: .*required" "" ${TDF} render)
-check(1 "^tdf tactile: .*--strength.*1e\\+400|^tdf tactile normal: .*--strength" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/n.png --strength 1e400)
-check(1 "^tdf: .*--threads" "" ${TDF} --threads -3 help)
+check(1 "^tdf tactile: --strength: Value 1e400 not in range 0.000000 to 1.8e\\+308 \\(see `tdf help tactile normal`\\)$" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/n.png --strength 1e400)
+check(1 "^tdf render: --threads: Value -3 not in range 0 to 4096" "" ${TDF} --threads -3 render ${_scene} -o ${OUT_DIR}/x)
 
 # Non-finite options are errors naming the option.
 check(1 "^tdf tactile: --strength: must be a finite number, got nan" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/n.png --strength nan)
 check(1 "^tdf tactile: --mm-per-pixel: must be a finite number, got nan" "" ${TDF} tactile height ${_normal} -o ${OUT_DIR}/h.exr --mm-per-pixel nan)
-check(1 "^tdf tactile: --mm-per-pixel: must be a finite number, got inf" "" ${TDF} tactile height ${_normal} -o ${OUT_DIR}/h.exr --mm-per-pixel inf)
+check(1 "^tdf tactile: --mm-per-pixel: (must be a finite number, got inf|Value inf not in range)" "" ${TDF} tactile height ${_normal} -o ${OUT_DIR}/h.exr --mm-per-pixel inf)
 
 # Bounded sizes, checked before any work.
 check(1 "^tdf render: --turntable" "" ${TDF} render ${_scene} -o ${OUT_DIR}/x --turntable 100000000)
-check(1 "^tdf render: .*scene.json: views: 100000000 views in all .* over the limit of 10000" "" ${TDF} render ${_scene} -o ${OUT_DIR}/x views.random.count=100000000)
+check(1 "^tdf render: .*scene.json.views: 100000002 views in all .* over the limit of 10000" "" ${TDF} render ${_scene} -o ${OUT_DIR}/x views.random.count=100000000)
 check(1 "^tdf render: .*image 16384x16384 at ssaa 4 .* over the limit of 16384" "" ${TDF} render ${_scene} -o ${OUT_DIR}/x ssaa=4 image.width=16384 image.height=16384)
 check(1 "^tdf tactile: --patch-size" "" ${TDF} tactile patch ${_normal} -o ${OUT_DIR}/p.exr --patch-size 100000)
 check(1 "^tdf tactile: --size" "" ${TDF} tactile quilt ${_normal} -o ${OUT_DIR}/q.exr --size 1000000)
@@ -75,9 +75,10 @@ check(1 "^tdf render: .*huge.json: invalid JSON: number overflow" "" ${TDF} rend
 
 # Output names say the format; a folder is not a file name.
 check(1 "^tdf compare: .*d.png: --diff .* must be named .exr" "" ${TDF} compare ${_normal} ${_normal} --diff ${OUT_DIR}/d.png)
-check(1 "^tdf tactile: .*n.jpg: a PNG file must be named .png" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/n.jpg)
+check(1 "^tdf tactile: .*n.jpg: a normal map \\(-o\\) must be named .png, .exr" "" ${TDF} -q tactile normal ${_normal} -o ${OUT_DIR}/n.jpg)
+check(1 "^tdf tactile: .*c.jpeg: a normal map \\(-o\\) must be named .png, .exr" "" ${TDF} -q tactile convert ${_normal} -o ${OUT_DIR}/c.jpeg)
 if(EXISTS ${OUT_DIR}/n.jpg)
   message(FATAL_ERROR "a refused n.jpg was written")
 endif()
 file(MAKE_DIRECTORY ${OUT_DIR}/folder.png)
-check(1 "^tdf tactile: cannot write '.*folder.png': it is a folder" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/folder.png)
+check(1 "^tdf tactile: cannot write '.*folder.png': it is a folder" "" ${TDF} -q tactile normal ${_normal} -o ${OUT_DIR}/folder.png)
