@@ -484,8 +484,57 @@ void write_exr(const std::string& path, const Image& image, const ImageMetadata&
     write_exr_file(path, {ExrLayer{"", default_channel_names(image.channels()), image}}, type, metadata);
 }
 
+namespace {
+
+// OpenEXR 3.1 allocates every header attribute at the size the file claims before reading it,
+// so a 50-byte file can make it allocate 2 GB (found by fuzzing). The attribute sizes are
+// checked against the file's length here first: magic, version, then per header a list of
+// name\0 type\0 int32 size + value, ended by an empty name (multi-part files: a list of
+// headers ended by an empty header).
+void check_exr_header(const std::string& path) {
+    FilePtr file = open_file(path, "rb");
+    const std::uint64_t size = file_size_or_zero(path);
+    unsigned char start[8];
+    if (std::fread(start, 1, 8, file.get()) != 8) throw_error("cannot read EXR '{}': file is too short", path);
+    const bool multipart = (start[5] & 0x10) != 0;  // version field bit 12
+    std::uint64_t at = 8;
+    auto read_name = [&](std::string& name) {
+        name.clear();
+        for (int c; (c = std::fgetc(file.get())) != 0;) {
+            if (c == EOF) throw_error("cannot read EXR '{}': truncated header", path);
+            if (name.size() >= 255) throw_error("cannot read EXR '{}': header name longer than 255 bytes", path);
+            name += char(c);
+        }
+        at += name.size() + 1;
+    };
+    for (int header = 0; header < 1024; ++header) {
+        std::string name, type;
+        read_name(name);
+        if (name.empty()) return;  // an empty header ends a multi-part list
+        for (int attribute = 0; attribute < 65536 && !name.empty(); ++attribute) {
+            read_name(type);
+            unsigned char b[4];
+            if (std::fread(b, 1, 4, file.get()) != 4) throw_error("cannot read EXR '{}': truncated header", path);
+            at += 4;
+            const std::int64_t length = std::int32_t(std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 |
+                                                     std::uint32_t(b[2]) << 16 | std::uint32_t(b[3]) << 24);
+            if (length < 0 || std::uint64_t(length) > size - std::min(size, at))
+                throw_error("cannot read EXR '{}': header attribute '{}' claims {} bytes, more than the file holds",
+                            path, name, length);
+            if (std::fseek(file.get(), long(length), SEEK_CUR) != 0)
+                throw_error("cannot read EXR '{}': truncated header", path);
+            at += std::uint64_t(length);
+            read_name(name);
+        }
+        if (!multipart) return;
+    }
+}
+
+}  // namespace
+
 std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* metadata) {
     if (!std::filesystem::exists(path)) throw_error("cannot open '{}': no such file", path);
+    check_exr_header(path);
     try {
         // OpenEXR itself refuses larger data windows while reading the header, before it
         // allocates its line-offset table.

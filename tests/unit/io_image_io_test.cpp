@@ -201,3 +201,24 @@ TEST(ImageIo, JpegRoundTripIsClose) {
     RecordProperty("psnr", std::to_string(psnr));
     EXPECT_GT(psnr, 30.0) << "max error " << max_error;
 }
+
+TEST(ImageIo, ExrAttributeClaimingMoreThanTheFileIsRefused) {
+    // OpenEXR itself would allocate the claimed size (2 GB) before noticing the file is short.
+    const std::string path = test::scratch_dir() + "/attribute.exr";
+    write_exr(path, ramp(3, 2, 1));
+    std::string bytes = file_bytes(path);
+    const std::string name("pixelAspectRatio\0float\0", 23);
+    const std::size_t at = bytes.find(name);
+    ASSERT_NE(at, std::string::npos);
+    const std::int32_t claimed = 0x7fffffff;
+    std::memcpy(&bytes[at + name.size()], &claimed, 4);
+    std::ofstream(path, std::ios::binary) << bytes;
+    try {
+        read_image(path);
+        FAIL() << "a 2 GB attribute in a " << bytes.size() << "-byte file was accepted";
+    } catch (const Error& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find(path), std::string::npos) << message;
+        EXPECT_NE(message.find("'pixelAspectRatio' claims 2147483647 bytes"), std::string::npos) << message;
+    }
+}
