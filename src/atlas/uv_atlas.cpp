@@ -541,8 +541,8 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
         const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
             return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
         };
-        // Progress in fixed stage weights (measured on a 1M-triangle sphere: flattening
-        // dominates, then packing); flattening advances per batch of charts.
+        // Progress in fixed stage weights (on a 1M-triangle sphere flattening takes most of
+        // the time); flattening advances per batch of charts.
         constexpr std::size_t kSurface = 5, kGrow = 10, kFlatten = 60, kPack = 25;
         // Meshes that unwrap in about a second stay quiet.
         constexpr std::size_t kProgressFaces = 50000;
@@ -561,20 +561,27 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
         std::vector<FlatChart> charts;
         // Rounds of parallel flattening; failed charts come back split. Results are collected
         // in list order, so the atlas does not depend on the thread count. Each round runs in
-        // batches so that progress moves; the first round carries the flattening weight (later
-        // rounds only redo the few charts that failed).
+        // batches so that progress moves; a round gets half of the flattening weight still
+        // left (the number of rounds is not known in advance: charts that fail come back split).
         std::size_t flatten_credit = kFlatten;
         while (!pending.empty()) {
+            const std::size_t round_budget = std::max<std::size_t>(flatten_credit / 2, flatten_credit > 0 ? 1 : 0);
+            std::size_t round_credit = round_budget;
             std::vector<FlattenOutcome> outcomes(pending.size());
+            // Batches of at least 4 charts per thread, so that batching never idles a thread
+            // (charts are independent: batching does not change the result).
             constexpr std::size_t kBatches = 20;
-            const std::size_t batch = std::max<std::size_t>(1, (pending.size() + kBatches - 1) / kBatches);
+            const std::size_t batch = std::max<std::size_t>((pending.size() + kBatches - 1) / kBatches,
+                                                            4 * std::size_t(std::max(1, ThreadLimit::current())));
             for (std::size_t first = 0; first < pending.size(); first += batch) {
                 const std::size_t last = std::min(pending.size(), first + batch);
                 parallel_for(last - first, 1, [&](std::size_t begin, std::size_t end) {
                     for (std::size_t i = first + begin; i < first + end; ++i)
                         outcomes[i] = flatten(surface, pending[i], options);
                 });
-                const std::size_t step = std::min(flatten_credit, kFlatten * (last - first) / pending.size());
+                const std::size_t share = round_budget * (last - first) / pending.size();
+                const std::size_t step = std::min(round_credit, std::max<std::size_t>(share, 1));
+                round_credit -= step;
                 flatten_credit -= step;
                 advance(step, fmt::format("flattened {}/{} charts", last, pending.size()));
             }
