@@ -486,47 +486,98 @@ void write_exr(const std::string& path, const Image& image, const ImageMetadata&
 
 namespace {
 
-// OpenEXR 3.1 allocates every header attribute at the size the file claims before reading it,
-// so a 50-byte file can make it allocate 2 GB (found by fuzzing). The attribute sizes are
-// checked against the file's length here first: magic, version, then per header a list of
-// name\0 type\0 int32 size + value, ended by an empty name (multi-part files: a list of
-// headers ended by an empty header).
-void check_exr_header(const std::string& path) {
-    FilePtr file = open_file(path, "rb");
-    const std::uint64_t size = file_size_or_zero(path);
-    unsigned char start[8];
-    if (std::fread(start, 1, 8, file.get()) != 8) throw_error("cannot read EXR '{}': file is too short", path);
-    const bool multipart = (start[5] & 0x10) != 0;  // version field bit 12
-    std::uint64_t at = 8;
-    auto read_name = [&](std::string& name) {
-        name.clear();
-        for (int c; (c = std::fgetc(file.get())) != 0;) {
-            if (c == EOF) throw_error("cannot read EXR '{}': truncated header", path);
-            if (name.size() >= 255) throw_error("cannot read EXR '{}': header name longer than 255 bytes", path);
-            name += char(c);
-        }
-        at += name.size() + 1;
+// OpenEXR 3.1 allocates string, opaque and preview attributes at the size the file claims
+// before reading them, so a 300-byte file can make it allocate gigabytes (found by fuzzing).
+// The header is walked here first the way OpenEXR reads it -- fixed-size types consume their
+// own size whatever the declared one, a channel list is parsed to its terminating empty name,
+// everything else consumes the declared size -- and every claim is checked against the bytes
+// left in the file. Layout: magic, version, then per header a list of name\0 type\0 int32 size
+// + value ended by an empty name (multi-part files: a list of headers ended by an empty one).
+struct NeedMoreHeader {};
+
+// Walks the header in `bytes`, the first bytes of a file of `file_size` bytes; throws
+// NeedMoreHeader when the header runs past `bytes` and the file is longer.
+void walk_exr_header(const std::string& path, const std::string& bytes, std::uint64_t file_size) {
+    std::size_t at = 8;
+    if (bytes.size() < at) throw_error("cannot read EXR '{}': file is too short", path);
+    const bool multipart = (std::uint8_t(bytes[5]) & 0x10) != 0;  // version field bit 12
+    const auto truncated = [&]() {
+        if (bytes.size() < file_size) throw NeedMoreHeader{};
+        throw_error("cannot read EXR '{}': truncated or corrupt header", path);
     };
+    const auto read_name = [&]() {
+        const std::size_t end = bytes.find('\0', at);
+        if (end == std::string::npos || end - at > 255) truncated();
+        std::string name = bytes.substr(at, end - at);
+        at = end + 1;
+        return name;
+    };
+    const auto read_i32 = [&]() {
+        if (bytes.size() - at < 4) truncated();
+        std::int32_t v;
+        std::memcpy(&v, bytes.data() + at, 4);
+        at += 4;
+        return std::int64_t(v);
+    };
+    static const std::map<std::string, std::size_t> kFixed = {
+        {"box2i", 16}, {"box2f", 16},    {"compression", 1}, {"lineOrder", 1}, {"float", 4},
+        {"double", 8}, {"int", 4},       {"v2i", 8},         {"v2f", 8},       {"v2d", 16},
+        {"v3i", 12},   {"v3f", 12},      {"v3d", 24},        {"m33f", 36},     {"m33d", 72},
+        {"m44f", 64},  {"m44d", 128},    {"tiledesc", 9},    {"chromaticities", 32},
+        {"envmap", 1}, {"keycode", 28},  {"timecode", 8},    {"rational", 8},  {"deepImageState", 1}};
     for (int header = 0; header < 1024; ++header) {
-        std::string name, type;
-        read_name(name);
-        if (name.empty()) return;  // an empty header ends a multi-part list
-        for (int attribute = 0; attribute < 65536 && !name.empty(); ++attribute) {
-            read_name(type);
-            unsigned char b[4];
-            if (std::fread(b, 1, 4, file.get()) != 4) throw_error("cannot read EXR '{}': truncated header", path);
-            at += 4;
-            const std::int64_t length = std::int32_t(std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 |
-                                                     std::uint32_t(b[2]) << 16 | std::uint32_t(b[3]) << 24);
-            if (length < 0 || std::uint64_t(length) > size - std::min(size, at))
+        for (int attribute = 0;; ++attribute) {
+            const std::string name = read_name();
+            if (name.empty()) {
+                if (attribute == 0 || !multipart) return;  // end of the header (list)
+                break;
+            }
+            if (attribute >= 65536) truncated();
+            const std::string type = read_name();
+            const std::int64_t size = read_i32();
+            const std::uint64_t left = file_size - std::min<std::uint64_t>(file_size, at);
+            if (size < 0 || std::uint64_t(size) > left)
                 throw_error("cannot read EXR '{}': header attribute '{}' claims {} bytes, more than the file holds",
-                            path, name, length);
-            if (std::fseek(file.get(), long(length), SEEK_CUR) != 0)
-                throw_error("cannot read EXR '{}': truncated header", path);
-            at += std::uint64_t(length);
-            read_name(name);
+                            path, name, size);
+            const auto fixed = kFixed.find(type);
+            if (fixed != kFixed.end()) {
+                if (bytes.size() - at < fixed->second) truncated();
+                at += fixed->second;
+            } else if (type == "chlist") {
+                while (!read_name().empty()) {  // name, then pixel type, linear + 3 reserved, x/y sampling
+                    if (bytes.size() - at < 16) truncated();
+                    at += 16;
+                }
+            } else if (type == "preview") {
+                const std::int64_t width = std::uint32_t(read_i32()), height = std::uint32_t(read_i32());
+                if (double(width) * double(height) * 4.0 > double(file_size - std::min<std::uint64_t>(file_size, at)))
+                    throw_error("cannot read EXR '{}': preview image of {}x{} pixels is larger than the file", path,
+                                width, height);
+                at += std::size_t(width * height * 4);
+            } else {
+                at += std::size_t(size);  // string, stringvector, opaque and other sized types
+            }
+            if (at > bytes.size()) truncated();
         }
-        if (!multipart) return;
+    }
+}
+
+void check_exr_header(const std::string& path) {
+    const std::uint64_t size = file_size_or_zero(path);
+    FilePtr file = open_file(path, "rb");
+    std::string bytes;
+    for (std::size_t want = 1 << 16;; want *= 4) {  // most headers are a few hundred bytes
+        const std::size_t have = bytes.size();
+        const std::size_t target = std::size_t(std::min<std::uint64_t>(size, want));
+        bytes.resize(std::max(target, have));
+        bytes.resize(have + std::fread(bytes.data() + have, 1, bytes.size() - have, file.get()));
+        const bool complete = bytes.size() < target || bytes.size() >= size;
+        try {
+            walk_exr_header(path, bytes, complete ? bytes.size() : size);
+            return;
+        } catch (const NeedMoreHeader&) {
+            // only thrown while the file has more bytes than were read
+        }
     }
 }
 
