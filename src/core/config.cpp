@@ -14,7 +14,7 @@ namespace {
 // keys is a mistake to report, not to guess at. The parser callback sees every key in order.
 class DuplicateKeyCheck {
 public:
-    explicit DuplicateKeyCheck(const std::string& source) : m_source(source) {}
+    explicit DuplicateKeyCheck(std::string source) : m_source(std::move(source)) {}
     bool operator()(int /*depth*/, Json::parse_event_t event, Json& parsed) {
         switch (event) {
             case Json::parse_event_t::object_start: m_objects.emplace_back(); break;
@@ -42,7 +42,7 @@ private:
         std::set<std::string> keys;
         std::string current;
     };
-    const std::string& m_source;
+    std::string m_source;  // a copy: callers pass temporaries (found by fuzzing)
     std::vector<Frame> m_objects;
 };
 
