@@ -525,11 +525,33 @@ void walk_exr_header(const std::string& path, const std::string& bytes, std::uin
         {"v3i", 12},   {"v3f", 12},      {"v3d", 24},        {"m33f", 36},     {"m33d", 72},
         {"m44f", 64},  {"m44d", 128},    {"tiledesc", 9},    {"chromaticities", 32},
         {"envmap", 1}, {"keycode", 28},  {"timecode", 8},    {"rational", 8},  {"deepImageState", 1}};
+    // What OpenEXR allocates from once the header is read: the pixel window (line buffers) and
+    // the chunk offset table (one 8-byte offset per line block or tile, all stored in the file).
+    std::int64_t window[4] = {0, 0, -1, -1};
+    std::int64_t tile_x = 0, tile_y = 0, channels = 0;
+    bool have_window = false, tiled = false;
+    const auto check_header = [&]() {
+        if (!have_window) return;  // OpenEXR reports the missing attribute itself
+        const std::int64_t width = window[2] - window[0] + 1, height = window[3] - window[1] + 1;
+        if (width <= 0 || height <= 0) throw_error("cannot read EXR '{}': empty data window", path);
+        check_image_size(path, file_size, "EXR", std::uint64_t(width), std::uint64_t(height),
+                         2.0 * double(width) * double(height) * double(std::max<std::int64_t>(channels, 1)));
+        if (tiled && (tile_x <= 0 || tile_y <= 0)) throw_error("cannot read EXR '{}': tile size {}x{}", path, tile_x, tile_y);
+        const double chunks = tiled ? std::ceil(double(width) / double(tile_x)) * std::ceil(double(height) / double(tile_y))
+                                    : std::ceil(double(height) / 256.0);  // at most 256 lines per block (DWAB)
+        if (chunks * 8.0 > double(file_size))
+            throw_error("cannot read EXR '{}': its {} chunk offsets cannot fit in a file of {} bytes", path,
+                        std::uint64_t(chunks), file_size);
+        have_window = tiled = false;
+        channels = 0;
+    };
     for (int header = 0; header < 1024; ++header) {
         for (int attribute = 0;; ++attribute) {
             const std::string name = read_name();
             if (name.empty()) {
-                if (attribute == 0 || !multipart) return;  // end of the header (list)
+                if (attribute == 0) return;  // end of a multi-part header list
+                check_header();
+                if (!multipart) return;
                 break;
             }
             if (attribute >= 65536) truncated();
@@ -542,11 +564,22 @@ void walk_exr_header(const std::string& path, const std::string& bytes, std::uin
             const auto fixed = kFixed.find(type);
             if (fixed != kFixed.end()) {
                 if (bytes.size() - at < fixed->second) truncated();
+                if (name == "dataWindow" && type == "box2i") {
+                    for (std::int64_t& v : window) v = read_i32();
+                    have_window = true;
+                    at -= 16;
+                } else if (name == "tiles" && type == "tiledesc") {
+                    tile_x = std::uint32_t(read_i32());
+                    tile_y = std::uint32_t(read_i32());
+                    tiled = true;
+                    at -= 8;
+                }
                 at += fixed->second;
             } else if (type == "chlist") {
                 while (!read_name().empty()) {  // name, then pixel type, linear + 3 reserved, x/y sampling
                     if (bytes.size() - at < 16) truncated();
                     at += 16;
+                    ++channels;
                 }
             } else if (type == "preview") {
                 const std::int64_t width = std::uint32_t(read_i32()), height = std::uint32_t(read_i32());
