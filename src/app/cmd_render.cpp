@@ -1,6 +1,4 @@
 // `tdf render scene.json -o out/ [key=value ...]`: one multi-layer EXR per view.
-#include <tdf/scene/scene_file.h>
-
 #include "commands.h"
 
 #include <tdf/core/atomic_file.h>
@@ -9,6 +7,7 @@
 #include <tdf/core/progress.h>
 #include <tdf/io/image_io.h>
 #include <tdf/render/scene_assets.h>
+#include <tdf/scene/scene_file.h>
 
 #include <filesystem>
 

@@ -109,8 +109,9 @@ struct PatchArgs {
                         options.depth_threshold,
                         "contact: raw height above which the sensor touches (mm)")
             ->capture_default_str();
-        app->add_option(
-               "--patch-size", options.size, "patch side after resampling in pixels (0 = keep the crop), at most 4096")
+        app->add_option("--patch-size",
+                        options.size,
+                        "patch side after resampling in pixels (0 = keep the crop), at most 4096")
             ->check(CLI::Range(0, 4096))
             ->capture_default_str();
     }
@@ -134,8 +135,9 @@ struct QuiltArgs {
         const bool tileable_default = convert_defaults;
         options.tileable = convert_defaults;
         if (convert_defaults) options.min_contrast = 0.5f, options.feather = 2;
-        app->add_option(
-               "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride), at most 8192")
+        app->add_option("--size",
+                        options.size,
+                        "output side in pixels (tileable: nearest multiple of the stride), at most 8192")
             ->check(CLI::Range(1, 8192))
             ->capture_default_str();
         app->add_option("--block", options.block, "block side in pixels")

@@ -1,8 +1,6 @@
 // tdf: one binary, one subcommand per job. Bad input surfaces here as tdf::Error and becomes
 // one line "tdf <command>: <message>" and exit code 1; usage errors (unknown option, missing
 // argument, value out of range or not finite) are one line and exit code 1 as well.
-#include "commands.h"
-
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/core/parallel.h>
@@ -13,6 +11,8 @@
 #include <cstdlib>
 #include <exception>
 #include <regex>
+
+#include "commands.h"
 
 namespace {
 
@@ -124,12 +124,20 @@ int main(int argc, char** argv) {
         const std::string command = path.substr(0, path.find(' '));
         std::string message = shorten_numbers(e.what());
         std::replace(message.begin(), message.end(), '\n', ' ');
-        std::fprintf(stderr, "tdf%s%s: %s (see `tdf help%s%s`)\n", command.empty() ? "" : " ", command.c_str(),
-                     message.c_str(), path.empty() ? "" : " ", path.c_str());
+        std::fprintf(stderr,
+                     "tdf%s%s: %s (see `tdf help%s%s`)\n",
+                     command.empty() ? "" : " ",
+                     command.c_str(),
+                     message.c_str(),
+                     path.empty() ? "" : " ",
+                     path.c_str());
         return 1;
     } catch (const Error& e) {
         const std::string path = command_path(root);
-        std::fprintf(stderr, "tdf%s%s: %s\n", path.empty() ? "" : " ", path.substr(0, path.find(' ')).c_str(),
+        std::fprintf(stderr,
+                     "tdf%s%s: %s\n",
+                     path.empty() ? "" : " ",
+                     path.substr(0, path.find(' ')).c_str(),
                      e.what());
         return 1;
     }
@@ -141,14 +149,18 @@ int main(int argc, char** argv) {
             const auto found =
                 topic->get_subcommands([&](const CLI::App* sub) { return sub->get_name() == word; });
             if (found.empty()) {
-                std::fprintf(stderr, "tdf help: '%s' has no command '%s' (see `tdf help%s`)\n", name.c_str(),
-                             word.c_str(), name == "tdf" ? "" : (" " + name.substr(4)).c_str());
+                std::fprintf(stderr,
+                             "tdf help: '%s' has no command '%s' (see `tdf help%s`)\n",
+                             name.c_str(),
+                             word.c_str(),
+                             name == "tdf" ? "" : (" " + name.substr(4)).c_str());
                 return 1;
             }
             topic = found.front();
             name += " " + word;
         }
-        std::fputs(topic->get_formatter()->make_help(topic, name, CLI::AppFormatMode::Normal).c_str(), stdout);
+        std::fputs(topic->get_formatter()->make_help(topic, name, CLI::AppFormatMode::Normal).c_str(),
+                   stdout);
         return 0;
     }
 
@@ -166,9 +178,11 @@ int main(int argc, char** argv) {
             // Loaders check sizes before allocating; reaching this means the inputs together
             // need more memory than the machine has.
             const std::string inputs = positional_arguments(*c.app);
-            std::fprintf(stderr, "tdf %s: out of memory while processing %s (the inputs or options need more "
+            std::fprintf(stderr,
+                         "tdf %s: out of memory while processing %s (the inputs or options need more "
                          "memory than is available)\n",
-                         name.c_str(), inputs.empty() ? "the command" : inputs.c_str());
+                         name.c_str(),
+                         inputs.empty() ? "the command" : inputs.c_str());
             return 1;
         } catch (const std::exception& e) {
             std::fprintf(stderr, "tdf %s: unexpected error: %s\n", name.c_str(), e.what());

@@ -565,14 +565,16 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
         // left (the number of rounds is not known in advance: charts that fail come back split).
         std::size_t flatten_credit = kFlatten;
         while (!pending.empty()) {
-            const std::size_t round_budget = std::max<std::size_t>(flatten_credit / 2, flatten_credit > 0 ? 1 : 0);
+            const std::size_t round_budget =
+                std::max<std::size_t>(flatten_credit / 2, flatten_credit > 0 ? 1 : 0);
             std::size_t round_credit = round_budget;
             std::vector<FlattenOutcome> outcomes(pending.size());
             // Batches of at least 4 charts per thread, so that batching never idles a thread
             // (charts are independent: batching does not change the result).
             constexpr std::size_t kBatches = 20;
-            const std::size_t batch = std::max<std::size_t>((pending.size() + kBatches - 1) / kBatches,
-                                                            4 * std::size_t(std::max(1, ThreadLimit::current())));
+            const std::size_t batch =
+                std::max<std::size_t>((pending.size() + kBatches - 1) / kBatches,
+                                      4 * std::size_t(std::max(1, ThreadLimit::current())));
             for (std::size_t first = 0; first < pending.size(); first += batch) {
                 const std::size_t last = std::min(pending.size(), first + batch);
                 parallel_for(last - first, 1, [&](std::size_t begin, std::size_t end) {

@@ -1,6 +1,5 @@
-#include <tdf/core/config.h>
-
 #include <tdf/core/atomic_file.h>
+#include <tdf/core/config.h>
 #include <tdf/core/error.h>
 
 #include <filesystem>
@@ -17,7 +16,9 @@ public:
     explicit DuplicateKeyCheck(std::string source) : m_source(std::move(source)) {}
     bool operator()(int /*depth*/, Json::parse_event_t event, Json& parsed) {
         switch (event) {
-            case Json::parse_event_t::object_start: m_objects.emplace_back(); break;
+            case Json::parse_event_t::object_start:
+                m_objects.emplace_back();
+                break;
             case Json::parse_event_t::object_end:
                 if (!m_objects.empty()) m_objects.pop_back();
                 break;
@@ -32,7 +33,8 @@ public:
                 }
                 break;
             }
-            default: break;
+            default:
+                break;
         }
         return true;
     }
@@ -172,8 +174,10 @@ void ConfigReader::check_all_read() const {
     if (!unknown.empty()) throw_error("{}: unknown key(s) {}", m_where, unknown);
 }
 
-void ConfigReader::range_error(const std::string& key, const std::string& low, const std::string& high) const {
-    throw_error("{}: '{}' must be an integer in [{}, {}], got {}", m_where, key, low, high, (*m_object)[key].dump());
+void ConfigReader::range_error(const std::string& key, const std::string& low,
+                               const std::string& high) const {
+    throw_error(
+        "{}: '{}' must be an integer in [{}, {}], got {}", m_where, key, low, high, (*m_object)[key].dump());
 }
 
 void ConfigReader::type_error(const std::string& key, const char* expected) const {

@@ -64,19 +64,29 @@ std::uintmax_t file_size_or_zero(const std::string& path) {
 
 // `decoded_bytes`: the size of the codec's decoded stream (PNG: filtered rows, JPEG: samples,
 // EXR: half-float samples).
-void check_image_size(const std::string& path, std::uint64_t file_size, const char* format, std::uint64_t width,
-                      std::uint64_t height, double decoded_bytes) {
+void check_image_size(const std::string& path, std::uint64_t file_size, const char* format,
+                      std::uint64_t width, std::uint64_t height, double decoded_bytes) {
     if (width == 0 || height == 0)
         throw_error("cannot read {} '{}': the image is empty ({}x{})", format, path, width, height);
     if (width > std::uint64_t(kMaxImageSide) || height > std::uint64_t(kMaxImageSide) ||
         width * height > std::uint64_t(kMaxImagePixels))
-        throw_error("cannot read {} '{}': {}x{} pixels is over the limit ({} per side, {} in all)", format, path,
-                    width, height, kMaxImageSide, kMaxImagePixels);
+        throw_error("cannot read {} '{}': {}x{} pixels is over the limit ({} per side, {} in all)",
+                    format,
+                    path,
+                    width,
+                    height,
+                    kMaxImageSide,
+                    kMaxImagePixels);
     const double file = double(file_size);
     if (decoded_bytes > kMaxDecodedBytesPerFileByte * file + 65536.0)
-        throw_error("cannot read {} '{}': the header claims {}x{} pixels but the file has only {} bytes "
-                    "(truncated or corrupt)",
-                    format, path, width, height, std::uint64_t(file));
+        throw_error(
+            "cannot read {} '{}': the header claims {}x{} pixels but the file has only {} bytes "
+            "(truncated or corrupt)",
+            format,
+            path,
+            width,
+            height,
+            std::uint64_t(file));
 }
 
 // ---- PNG -------------------------------------------------------------------------------------
@@ -113,7 +123,8 @@ Image read_png(std::FILE* file, const std::string& path, std::uint64_t file_size
     const int color_type = png_get_color_type(png, info);
     int bit_depth = png_get_bit_depth(png, info);
     try {
-        check_image_size(path, file_size, "PNG", width, height, double(png_get_rowbytes(png, info) + 1) * double(height));
+        check_image_size(
+            path, file_size, "PNG", width, height, double(png_get_rowbytes(png, info) + 1) * double(height));
     } catch (...) {
         png_destroy_read_struct(&png, &info, nullptr);
         throw;
@@ -238,8 +249,13 @@ Image read_jpeg(std::FILE* file, const std::string& path, std::uint64_t file_siz
     jpeg_read_header(&cinfo, TRUE);
     if (cinfo.num_components != 1) cinfo.out_color_space = JCS_RGB;
     try {
-        check_image_size(path, file_size, "JPEG", cinfo.image_width, cinfo.image_height,
-                         double(cinfo.image_width) * double(cinfo.image_height) * double(cinfo.num_components));
+        check_image_size(
+            path,
+            file_size,
+            "JPEG",
+            cinfo.image_width,
+            cinfo.image_height,
+            double(cinfo.image_width) * double(cinfo.image_height) * double(cinfo.num_components));
     } catch (...) {
         jpeg_destroy_decompress(&cinfo);
         throw;
@@ -367,7 +383,8 @@ Image decode_image(const std::string& bytes, const std::string& where) {
     if (!png && !jpeg) throw_error("cannot read image '{}': not a PNG or JPEG", where);
     FilePtr file(fmemopen(const_cast<char*>(bytes.data()), bytes.size(), "rb"));
     if (!file) throw_error("cannot read image '{}': {}", where, std::strerror(errno));
-    return png ? read_png(file.get(), where, bytes.size(), nullptr) : read_jpeg(file.get(), where, bytes.size());
+    return png ? read_png(file.get(), where, bytes.size(), nullptr)
+               : read_jpeg(file.get(), where, bytes.size());
 }
 
 void write_png(const std::string& path, const Image& image, int bits, Quantize quantize) {
@@ -380,7 +397,10 @@ void check_output_extension(const std::string& path, const std::vector<std::stri
     if (std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) return;
     std::string list;
     for (const auto& e : extensions) list += (list.empty() ? "" : ", ") + e;
-    throw_error("{}: {} must be named {} (the extension chooses the format), got '{}'", path, what, list,
+    throw_error("{}: {} must be named {} (the extension chooses the format), got '{}'",
+                path,
+                what,
+                list,
                 ext.empty() ? "no extension" : ext);
 }
 
@@ -399,9 +419,11 @@ void write_png(const std::string& path, const Image& image, const ImageMetadata&
 
 void write_jpeg(const std::string& path, const Image& image, int quality) {
     check_output_extension(path, {".jpg", ".jpeg"}, "a JPEG file");
-    if (quality < 1 || quality > 100) throw_error("cannot write JPEG '{}': quality must be in 1..100, got {}", path, quality);
+    if (quality < 1 || quality > 100)
+        throw_error("cannot write JPEG '{}': quality must be in 1..100, got {}", path, quality);
     if (image.empty() || image.channels() < 1 || image.channels() > 4)
-        throw_error("cannot write JPEG '{}': the image is empty or has {} channels (1 to 4 supported)", path,
+        throw_error("cannot write JPEG '{}': the image is empty or has {} channels (1 to 4 supported)",
+                    path,
                     image.channels());
     write_atomically(path, [&](const std::string& tmp) { write_jpeg_file(tmp, image, quality); });
 }
@@ -519,12 +541,30 @@ void walk_exr_header(const std::string& path, const std::string& bytes, std::uin
         at += 4;
         return std::int64_t(v);
     };
-    static const std::map<std::string, std::size_t> kFixed = {
-        {"box2i", 16}, {"box2f", 16},    {"compression", 1}, {"lineOrder", 1}, {"float", 4},
-        {"double", 8}, {"int", 4},       {"v2i", 8},         {"v2f", 8},       {"v2d", 16},
-        {"v3i", 12},   {"v3f", 12},      {"v3d", 24},        {"m33f", 36},     {"m33d", 72},
-        {"m44f", 64},  {"m44d", 128},    {"tiledesc", 9},    {"chromaticities", 32},
-        {"envmap", 1}, {"keycode", 28},  {"timecode", 8},    {"rational", 8},  {"deepImageState", 1}};
+    static const std::map<std::string, std::size_t> kFixed = {{"box2i", 16},
+                                                              {"box2f", 16},
+                                                              {"compression", 1},
+                                                              {"lineOrder", 1},
+                                                              {"float", 4},
+                                                              {"double", 8},
+                                                              {"int", 4},
+                                                              {"v2i", 8},
+                                                              {"v2f", 8},
+                                                              {"v2d", 16},
+                                                              {"v3i", 12},
+                                                              {"v3f", 12},
+                                                              {"v3d", 24},
+                                                              {"m33f", 36},
+                                                              {"m33d", 72},
+                                                              {"m44f", 64},
+                                                              {"m44d", 128},
+                                                              {"tiledesc", 9},
+                                                              {"chromaticities", 32},
+                                                              {"envmap", 1},
+                                                              {"keycode", 28},
+                                                              {"timecode", 8},
+                                                              {"rational", 8},
+                                                              {"deepImageState", 1}};
     // What OpenEXR allocates from once the header is read: the pixel window (line buffers) and
     // the chunk offset table (one 8-byte offset per line block or tile, all stored in the file).
     std::int64_t window[4] = {0, 0, -1, -1};
@@ -534,14 +574,22 @@ void walk_exr_header(const std::string& path, const std::string& bytes, std::uin
         if (!have_window) return;  // OpenEXR reports the missing attribute itself
         const std::int64_t width = window[2] - window[0] + 1, height = window[3] - window[1] + 1;
         if (width <= 0 || height <= 0) throw_error("cannot read EXR '{}': empty data window", path);
-        check_image_size(path, file_size, "EXR", std::uint64_t(width), std::uint64_t(height),
+        check_image_size(path,
+                         file_size,
+                         "EXR",
+                         std::uint64_t(width),
+                         std::uint64_t(height),
                          2.0 * double(width) * double(height) * double(std::max<std::int64_t>(channels, 1)));
-        if (tiled && (tile_x <= 0 || tile_y <= 0)) throw_error("cannot read EXR '{}': tile size {}x{}", path, tile_x, tile_y);
-        const double chunks = tiled ? std::ceil(double(width) / double(tile_x)) * std::ceil(double(height) / double(tile_y))
-                                    : std::ceil(double(height) / 256.0);  // at most 256 lines per block (DWAB)
+        if (tiled && (tile_x <= 0 || tile_y <= 0))
+            throw_error("cannot read EXR '{}': tile size {}x{}", path, tile_x, tile_y);
+        const double chunks =
+            tiled ? std::ceil(double(width) / double(tile_x)) * std::ceil(double(height) / double(tile_y))
+                  : std::ceil(double(height) / 256.0);  // at most 256 lines per block (DWAB)
         if (chunks * 8.0 > double(file_size))
-            throw_error("cannot read EXR '{}': its {} chunk offsets cannot fit in a file of {} bytes", path,
-                        std::uint64_t(chunks), file_size);
+            throw_error("cannot read EXR '{}': its {} chunk offsets cannot fit in a file of {} bytes",
+                        path,
+                        std::uint64_t(chunks),
+                        file_size);
         have_window = tiled = false;
         channels = 0;
     };
@@ -559,8 +607,11 @@ void walk_exr_header(const std::string& path, const std::string& bytes, std::uin
             const std::int64_t size = read_i32();
             const std::uint64_t left = file_size - std::min<std::uint64_t>(file_size, at);
             if (size < 0 || std::uint64_t(size) > left)
-                throw_error("cannot read EXR '{}': header attribute '{}' claims {} bytes, more than the file holds",
-                            path, name, size);
+                throw_error(
+                    "cannot read EXR '{}': header attribute '{}' claims {} bytes, more than the file holds",
+                    path,
+                    name,
+                    size);
             const auto fixed = kFixed.find(type);
             if (fixed != kFixed.end()) {
                 if (bytes.size() - at < fixed->second) truncated();
@@ -583,9 +634,12 @@ void walk_exr_header(const std::string& path, const std::string& bytes, std::uin
                 }
             } else if (type == "preview") {
                 const std::int64_t width = std::uint32_t(read_i32()), height = std::uint32_t(read_i32());
-                if (double(width) * double(height) * 4.0 > double(file_size - std::min<std::uint64_t>(file_size, at)))
-                    throw_error("cannot read EXR '{}': preview image of {}x{} pixels is larger than the file", path,
-                                width, height);
+                if (double(width) * double(height) * 4.0 >
+                    double(file_size - std::min<std::uint64_t>(file_size, at)))
+                    throw_error("cannot read EXR '{}': preview image of {}x{} pixels is larger than the file",
+                                path,
+                                width,
+                                height);
                 at += std::size_t(width * height * 4);
             } else {
                 at += std::size_t(size);  // string, stringvector, opaque and other sized types
@@ -636,16 +690,20 @@ std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* me
                     (*metadata)[it.name()] = text->value();
         const std::int64_t wide_width = std::int64_t(window.max.x) - window.min.x + 1;
         const std::int64_t wide_height = std::int64_t(window.max.y) - window.min.y + 1;
-        if (wide_width <= 0 || wide_height <= 0)
-            throw_error("cannot read EXR '{}': empty data window", path);
+        if (wide_width <= 0 || wide_height <= 0) throw_error("cannot read EXR '{}': empty data window", path);
         std::size_t channel_count = 0;
         for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {
             if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
-                throw_error("cannot read EXR '{}': subsampled channel '{}' is not supported", path, it.name());
+                throw_error(
+                    "cannot read EXR '{}': subsampled channel '{}' is not supported", path, it.name());
             ++channel_count;
         }
         if (channel_count == 0) throw_error("cannot read EXR '{}': the file has no channels", path);
-        check_image_size(path, file_size_or_zero(path), "EXR", std::uint64_t(wide_width), std::uint64_t(wide_height),
+        check_image_size(path,
+                         file_size_or_zero(path),
+                         "EXR",
+                         std::uint64_t(wide_width),
+                         std::uint64_t(wide_height),
                          2.0 * double(wide_width) * double(wide_height) * double(channel_count));
         const int width = int(wide_width), height = int(wide_height);
         std::map<std::string, std::vector<std::string>> layer_channels;  // layer -> channel suffixes

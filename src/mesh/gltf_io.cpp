@@ -6,12 +6,10 @@
 // between charts. Vertices with bit-identical transformed positions are therefore welded into
 // one position index (UVs keep their own index buffer), so area-weighted normals stay smooth
 // across seams exactly as for the equivalent OBJ.
-#include <tdf/mesh/mesh_io.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
-
+#include <tdf/mesh/mesh_io.h>
 #include <tiny_gltf.h>
 
 #include <algorithm>
@@ -68,15 +66,24 @@ double determinant3(const Mat4d& m) {
 
 const char* component_type_name(int type) {
     switch (type) {
-        case TINYGLTF_COMPONENT_TYPE_BYTE: return "BYTE";
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return "UNSIGNED_BYTE";
-        case TINYGLTF_COMPONENT_TYPE_SHORT: return "SHORT";
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return "UNSIGNED_SHORT";
-        case TINYGLTF_COMPONENT_TYPE_INT: return "INT";
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return "UNSIGNED_INT";
-        case TINYGLTF_COMPONENT_TYPE_FLOAT: return "FLOAT";
-        case TINYGLTF_COMPONENT_TYPE_DOUBLE: return "DOUBLE";
-        default: return "unknown";
+        case TINYGLTF_COMPONENT_TYPE_BYTE:
+            return "BYTE";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+            return "UNSIGNED_BYTE";
+        case TINYGLTF_COMPONENT_TYPE_SHORT:
+            return "SHORT";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+            return "UNSIGNED_SHORT";
+        case TINYGLTF_COMPONENT_TYPE_INT:
+            return "INT";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+            return "UNSIGNED_INT";
+        case TINYGLTF_COMPONENT_TYPE_FLOAT:
+            return "FLOAT";
+        case TINYGLTF_COMPONENT_TYPE_DOUBLE:
+            return "DOUBLE";
+        default:
+            return "unknown";
     }
 }
 
@@ -95,12 +102,17 @@ public:
         // UNSIGNED_BYTE / UNSIGNED_SHORT. Anything else is a broken or quantized file we would
         // otherwise read as wrong numbers.
         const bool is_float = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT;
-        const bool normalized_integer = a.normalized && (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
-                                                         a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+        const bool normalized_integer =
+            a.normalized && (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                             a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
         if (!is_float && (std::strcmp(what, "POSITION") == 0 || !normalized_integer))
-            throw_error("{}: {} has component type {}{}, expected FLOAT{}", m_path, what,
-                        component_type_name(a.componentType), a.normalized ? " (normalized)" : "",
-                        std::strcmp(what, "POSITION") == 0 ? "" : " or normalized UNSIGNED_BYTE/UNSIGNED_SHORT");
+            throw_error(
+                "{}: {} has component type {}{}, expected FLOAT{}",
+                m_path,
+                what,
+                component_type_name(a.componentType),
+                a.normalized ? " (normalized)" : "",
+                std::strcmp(what, "POSITION") == 0 ? "" : " or normalized UNSIGNED_BYTE/UNSIGNED_SHORT");
         const unsigned char* base = nullptr;
         std::size_t stride = 0;
         data(a, what, base, stride);  // bounds-checks the count against the buffer before allocating
@@ -185,7 +197,10 @@ private:
         const std::size_t start = view.byteOffset + a.byteOffset;
         if (a.count > 0 && (a.count - 1 > size / std::max<std::size_t>(stride, 1) ||
                             start + (a.count - 1) * stride + std::size_t(element) > size))
-            throw_error("{}: {} has {} elements, more than its buffer holds (truncated file?)", m_path, what, a.count);
+            throw_error("{}: {} has {} elements, more than its buffer holds (truncated file?)",
+                        m_path,
+                        what,
+                        a.count);
         const std::size_t end = a.count == 0 ? start : start + (a.count - 1) * stride + std::size_t(element);
         if (end > buffer.size() || end > view.byteOffset + view.byteLength)
             throw_error("{}: {} reads past the end of its buffer (truncated file?)", m_path, what);
@@ -218,7 +233,8 @@ void embedded_image_bytes(const tinygltf::Model& model, int view_index, const st
         throw_error("{}: image buffer view {} has no valid buffer", path, view_index);
     const std::vector<unsigned char>& buffer = model.buffers[std::size_t(view.buffer)].data;
     if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
-        throw_error("{}: image buffer view {} reads past the end of its buffer (truncated file?)", path, view_index);
+        throw_error(
+            "{}: image buffer view {} reads past the end of its buffer (truncated file?)", path, view_index);
     base = buffer.data() + view.byteOffset;
     length = view.byteLength;
 }

@@ -117,10 +117,13 @@ void parse_views(ConfigReader views, ViewsSpec& spec) {
     spec.patch_reference_flip = patches.get<bool>("reference_flip", false);
     patches.check_all_read();
     views.check_all_read();
-    const long long total = (long long)spec.orbit.size() + spec.turntable_count + spec.random_count + spec.patch_count;
+    const long long total =
+        (long long)spec.orbit.size() + spec.turntable_count + spec.random_count + spec.patch_count;
     if (total > kMaxSceneViews)
-        throw_error("{}: {} views in all (orbit + turntable + random + patches) is over the limit of {}", views.where(),
-                    total, kMaxSceneViews);
+        throw_error("{}: {} views in all (orbit + turntable + random + patches) is over the limit of {}",
+                    views.where(),
+                    total,
+                    kMaxSceneViews);
     if (spec.orbit.empty() && spec.turntable_count == 0 && spec.random_count == 0 && spec.patch_count == 0)
         spec.orbit.push_back({0.f, 0.f, spec.radius, spec.fovy});
 }
@@ -183,10 +186,15 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     // Supersampled views render at `ssaa` times the size (random views at up to 2x).
     const float largest_ssaa = std::max(s.ssaa, s.views.random_count > 0 && s.views.random_ssaa ? 2.f : 1.f);
     if (float(std::max(s.width, s.height)) * largest_ssaa > float(kMaxRenderSide))
-        throw_error("{}: image {}x{} at ssaa {} renders {:.0f} pixels wide, over the limit of {} (lower 'ssaa' or "
-                    "'image.width'/'image.height')",
-                    path, s.width, s.height, largest_ssaa, float(std::max(s.width, s.height)) * largest_ssaa,
-                    kMaxRenderSide);
+        throw_error(
+            "{}: image {}x{} at ssaa {} renders {:.0f} pixels wide, over the limit of {} (lower 'ssaa' or "
+            "'image.width'/'image.height')",
+            path,
+            s.width,
+            s.height,
+            largest_ssaa,
+            float(std::max(s.width, s.height)) * largest_ssaa,
+            kMaxRenderSide);
     parse_light(root.child("light"), s.shading, s.light);
     for (const auto& name : foreign_scene_sections())
         if (root.has(name)) s.sections[name] = root.raw(name);

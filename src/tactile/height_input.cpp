@@ -1,8 +1,7 @@
-#include <tdf/tactile/height_input.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
+#include <tdf/tactile/height_input.h>
 #include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/npy_reader.h>
 #include <tdf/tactile/poisson.h>
@@ -113,10 +112,12 @@ HeightInput load_image(const std::string& path, const HeightInputOptions& option
 
 HeightInput load_height_input(const std::string& path, const HeightInputOptions& options) {
     if (!std::isfinite(options.mm_per_pixel) || options.mm_per_pixel < 0)
-        throw_error("{}: the pixel size (--mm-per-pixel) must be a finite number >= 0, got {}", path,
+        throw_error("{}: the pixel size (--mm-per-pixel) must be a finite number >= 0, got {}",
+                    path,
                     options.mm_per_pixel);
     if (!std::isfinite(options.image_height_mm) || !(options.image_height_mm > 0))
-        throw_error("{}: the full-scale height (--height-mm) must be a finite positive number, got {}", path,
+        throw_error("{}: the full-scale height (--height-mm) must be a finite positive number, got {}",
+                    path,
                     options.image_height_mm);
     const std::string ext = lower_extension(path);
     HeightInput input;

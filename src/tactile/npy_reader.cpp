@@ -178,7 +178,8 @@ std::string inflate_raw(const std::string& compressed, std::uint64_t size, const
     // DEFLATE expands at most 1032:1; a larger claimed size is a corrupt header, refused before
     // allocating it.
     if (size > 1032 * std::uint64_t(compressed.size()) + 1024)
-        throw_error("{}: uncompressed size {} is impossible for {} compressed bytes", where, size, compressed.size());
+        throw_error(
+            "{}: uncompressed size {} is impossible for {} compressed bytes", where, size, compressed.size());
     std::string out(size, '\0');
     z_stream stream{};
     if (inflateInit2(&stream, -MAX_WBITS) != Z_OK) throw_error("{}: cannot initialise zlib", where);
@@ -231,8 +232,10 @@ NpyArray parse_npy(const std::string& bytes, const std::string& where) {
     std::size_t count = 1;
     for (std::size_t n : array.shape) {
         if (n != 0 && count > (bytes.size() + 1) / n)
-            throw_error("{}: shape {} needs more data than the {} bytes present", where,
-                        header_value(header, "shape", where), bytes.size());
+            throw_error("{}: shape {} needs more data than the {} bytes present",
+                        where,
+                        header_value(header, "shape", where),
+                        bytes.size());
         count *= n;
     }
     const std::size_t data_start = header_start + header_length;
@@ -284,22 +287,23 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
     std::map<std::string, NpyArray> arrays;
     std::size_t at = std::size_t(directory);
     for (std::uint64_t e = 0; e < entries; ++e) {
-        if (!fits(zip, at, 46) || u32(zip, at) != 0x02014b50u)
-            throw_error("{}: corrupt zip directory", path);
+        if (!fits(zip, at, 46) || u32(zip, at) != 0x02014b50u) throw_error("{}: corrupt zip directory", path);
         const std::uint16_t method = u16(zip, at + 10);
         const std::uint32_t crc = u32(zip, at + 16);
         std::uint64_t compressed = u32(zip, at + 20), uncompressed = u32(zip, at + 24);
         const std::size_t name_length = u16(zip, at + 28), extra_length = u16(zip, at + 30),
                           comment_length = u16(zip, at + 32);
         std::uint64_t local = u32(zip, at + 42);
-        if (!fits(zip, at, 46 + std::uint64_t(name_length) + extra_length)) throw_error("{}: corrupt zip directory", path);
+        if (!fits(zip, at, 46 + std::uint64_t(name_length) + extra_length))
+            throw_error("{}: corrupt zip directory", path);
         const std::string name = zip.substr(at + 46, name_length);
         // ZIP64 extra field: the 64-bit values follow in this order, only for saturated fields.
         for (std::size_t x = at + 46 + name_length; x + 4 <= at + 46 + name_length + extra_length;) {
             const std::uint16_t id = u16(zip, x), length = u16(zip, x + 2);
             std::size_t field = x + 4;
             // Each 64-bit value must lie inside this extra record (and so inside the file).
-            const std::size_t record_end = std::min(x + 4 + std::size_t(length), at + 46 + name_length + extra_length);
+            const std::size_t record_end =
+                std::min(x + 4 + std::size_t(length), at + 46 + name_length + extra_length);
             const auto take = [&](std::uint64_t& value) {
                 if (value != 0xffffffffu) return;
                 if (field + 8 > record_end) throw_error("{}: corrupt ZIP64 extra field", path);
@@ -332,7 +336,10 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
         const std::uint32_t actual =
             std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(member.data()), uInt(member.size())));
         if (actual != crc)
-            throw_error("{}: CRC mismatch (stored {:08x}, computed {:08x}): the archive is corrupt", where, crc, actual);
+            throw_error("{}: CRC mismatch (stored {:08x}, computed {:08x}): the archive is corrupt",
+                        where,
+                        crc,
+                        actual);
         std::string key = name;
         if (key.size() > 4 && key.compare(key.size() - 4, 4, ".npy") == 0) key.resize(key.size() - 4);
         arrays[key] = parse_npy(member, where);

@@ -1,11 +1,11 @@
 // One libFuzzer harness; TDF_FUZZ_TARGET names the reader (tests/fuzz/fuzz_targets.cpp).
 // Built by -DTDF_FUZZ=ON with clang; run with scripts/fuzz.sh.
-#include "fuzz/fuzz_targets.h"
-
 #include <tdf/core/log.h>
 
 #include <cstdio>
 #include <cstdlib>
+
+#include "fuzz/fuzz_targets.h"
 
 namespace {
 const tdf::fuzz::Target* g_target = nullptr;

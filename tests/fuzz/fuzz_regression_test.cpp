@@ -1,14 +1,13 @@
 // Replays tests/fuzz/regressions/<target>/* (inputs that once crashed a reader or made it
 // allocate without bound, found by scripts/fuzz.sh) through the same harness bodies as the
 // fuzzers. Each must now return or throw tdf::Error; run_one rethrows anything else.
-#include "fuzz/fuzz_targets.h"
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/log.h>
 
 #include <filesystem>
 
 #include "common/test_paths.h"
+#include "fuzz/fuzz_targets.h"
 
 namespace fs = std::filesystem;
 
@@ -26,8 +25,8 @@ TEST_P(FuzzRegression, EveryStoredInputIsHandled) {
         for (const auto& entry : fs::directory_iterator(folder)) {
             if (!entry.is_regular_file()) continue;
             const std::string bytes = tdf::read_text_file(entry.path().string());
-            EXPECT_NO_THROW(tdf::fuzz::run_one(*target, reinterpret_cast<const std::uint8_t*>(bytes.data()),
-                                               bytes.size()))
+            EXPECT_NO_THROW(tdf::fuzz::run_one(
+                *target, reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()))
                 << entry.path();
             ++replayed;
         }
@@ -40,10 +39,13 @@ TEST_P(FuzzRegression, EdgeCaseInputsAreHandled) {
     const tdf::fuzz::Target* target = tdf::fuzz::find_target(GetParam());
     ASSERT_NE(target, nullptr);
     const std::string noise("\x00\xff\x7f\x80glTF\x93NUMPY PK\x03\x04\x89PNG", 28);
-    for (const std::string& input : {std::string(), std::string(tdf::fuzz::kPartSeparator), noise,
-                                     std::string("{}"), std::string(4096, '\n')})
-        EXPECT_NO_THROW(tdf::fuzz::run_one(*target, reinterpret_cast<const std::uint8_t*>(input.data()),
-                                           input.size()));
+    for (const std::string& input : {std::string(),
+                                     std::string(tdf::fuzz::kPartSeparator),
+                                     noise,
+                                     std::string("{}"),
+                                     std::string(4096, '\n')})
+        EXPECT_NO_THROW(
+            tdf::fuzz::run_one(*target, reinterpret_cast<const std::uint8_t*>(input.data()), input.size()));
 }
 
 INSTANTIATE_TEST_SUITE_P(Readers, FuzzRegression,

@@ -10,7 +10,6 @@
 #include <tdf/scene/scene_file.h>
 #include <tdf/tactile/npy_reader.h>
 #include <tdf/tactile/tmd_reader.h>
-
 #include <unistd.h>
 
 #include <filesystem>
@@ -28,7 +27,8 @@ public:
     Scratch() {
         // Memory-backed when available: the harnesses write one small file per input.
         std::error_code ec;
-        const fs::path base = fs::is_directory("/dev/shm", ec) ? fs::path("/dev/shm") : fs::temp_directory_path();
+        const fs::path base =
+            fs::is_directory("/dev/shm", ec) ? fs::path("/dev/shm") : fs::temp_directory_path();
         m_folder = base / ("tdf_fuzz_" + std::to_string(getpid()));
         fs::create_directories(m_folder);
     }
@@ -104,7 +104,9 @@ void fuzz_gltf(const std::uint8_t* data, std::size_t size) {
     load_gltf(write_file("in.gltf", parts[0]));
 }
 
-void fuzz_ply(const std::uint8_t* data, std::size_t size) { load_ply(write_file("in.ply", as_string(data, size))); }
+void fuzz_ply(const std::uint8_t* data, std::size_t size) {
+    load_ply(write_file("in.ply", as_string(data, size)));
+}
 
 // PNG, JPEG or EXR by content, as `read_image` and `read_exr_layers` see them.
 void fuzz_image(const std::uint8_t* data, std::size_t size) {
@@ -114,7 +116,8 @@ void fuzz_image(const std::uint8_t* data, std::size_t size) {
         read_image(path, metadata);
     } catch (const Error&) {
     }
-    if (size >= 4 && data[0] == 0x76 && data[1] == 0x2f && data[2] == 0x31 && data[3] == 0x01) read_exr_layers(path);
+    if (size >= 4 && data[0] == 0x76 && data[1] == 0x2f && data[2] == 0x31 && data[3] == 0x01)
+        read_exr_layers(path);
 }
 
 // A .npy image (parsed from memory), or a .npz archive when the input starts with "PK".
@@ -126,7 +129,9 @@ void fuzz_npy(const std::uint8_t* data, std::size_t size) {
         parse_npy(bytes, "in.npy");
 }
 
-void fuzz_tmd(const std::uint8_t* data, std::size_t size) { read_tmd(write_file("in.tmd", as_string(data, size))); }
+void fuzz_tmd(const std::uint8_t* data, std::size_t size) {
+    read_tmd(write_file("in.tmd", as_string(data, size)));
+}
 
 // scene.json, then optionally "----" and key=value overrides one per line, then optionally
 // "----" and base.json (reachable through "parent": "base.json").
@@ -153,8 +158,13 @@ void fuzz_scene(const std::uint8_t* data, std::size_t size) {
 
 const std::vector<Target>& targets() {
     static const std::vector<Target> list = {
-        {"obj", fuzz_obj}, {"gltf", fuzz_gltf}, {"ply", fuzz_ply},     {"image", fuzz_image},
-        {"npy", fuzz_npy}, {"tmd", fuzz_tmd},   {"scene", fuzz_scene},
+        {"obj", fuzz_obj},
+        {"gltf", fuzz_gltf},
+        {"ply", fuzz_ply},
+        {"image", fuzz_image},
+        {"npy", fuzz_npy},
+        {"tmd", fuzz_tmd},
+        {"scene", fuzz_scene},
     };
     return list;
 }

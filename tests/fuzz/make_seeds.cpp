@@ -3,20 +3,19 @@
 //   make_fuzz_seeds <folder>    -> <folder>/<target>/<name>
 // The inputs use the harnesses' conventions (tests/fuzz/fuzz_targets.h: parts joined by
 // kPartSeparator), so the same bytes replay through tdf_fuzz_regression_tests.
-#include "fuzz/fuzz_targets.h"
-
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_writer.h>
 #include <tdf/scene/procedural_mesh.h>
-
 #include <zlib.h>
 
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+
+#include "fuzz/fuzz_targets.h"
 
 namespace fs = std::filesystem;
 using namespace tdf;
@@ -51,13 +50,18 @@ Image gradient(int w, int h, int channels) {
 }
 
 void obj_seeds() {
-    seed("obj", "triangle.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n");
-    seed("obj", "quad_negative_colours.obj",
-         "o quad\ng front\nv -1 -1 0 1 0 0\nv 1 -1 0 0 1 0\nv 1 1 0 0 0 1\nv -1 1 0 1 1 1\nusemtl red\nf -4 -3 -2 -1\n");
+    seed("obj",
+         "triangle.obj",
+         "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n");
+    seed("obj",
+         "quad_negative_colours.obj",
+         "o quad\ng front\nv -1 -1 0 1 0 0\nv 1 -1 0 0 1 0\nv 1 1 0 0 0 1\nv -1 1 0 1 1 1\nusemtl red\nf -4 "
+         "-3 -2 -1\n");
     seed("obj", "normals_only.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\ns off\nl 1 2\n");
-    seed("obj", "with_mtl.obj",
-         "mtllib in.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n" + kSep +
-             "newmtl m\nKd 1 1 1\nmap_Kd -s 1 1 1 missing.png\nnorm n.png\nmap_Bump -bm 1 n.png\n");
+    seed("obj",
+         "with_mtl.obj",
+         "mtllib in.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n" +
+             kSep + "newmtl m\nKd 1 1 1\nmap_Kd -s 1 1 1 missing.png\nnorm n.png\nmap_Bump -bm 1 n.png\n");
     seed("obj", "bad_index.obj", "v 0 0 0\nv 1 0 0\nf 1 2 7\n");
     seed("obj", "zero_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
     seed("obj", "huge_numbers.obj", "v 1e39 -1e39 nan\nv inf 0 0\nv 0 1 0\nf 1 2 3\nf 99999999999 1 2\n");
@@ -72,8 +76,8 @@ std::string base64(const std::string& bytes) {
     std::string out;
     std::size_t i = 0;
     for (; i + 2 < bytes.size(); i += 3) {
-        const unsigned v = (unsigned(std::uint8_t(bytes[i])) << 16) | (unsigned(std::uint8_t(bytes[i + 1])) << 8) |
-                           unsigned(std::uint8_t(bytes[i + 2]));
+        const unsigned v = (unsigned(std::uint8_t(bytes[i])) << 16) |
+                           (unsigned(std::uint8_t(bytes[i + 1])) << 8) | unsigned(std::uint8_t(bytes[i + 2]));
         for (int k = 3; k >= 0; --k) out += table[(v >> (6 * k)) & 63];
     }
     if (i < bytes.size()) {
@@ -115,7 +119,8 @@ std::string triangle_gltf(const std::string& uri, std::size_t length) {
 
 void gltf_seeds() {
     const std::string buffer = triangle_buffer();
-    seed("gltf", "triangle_data_uri.gltf",
+    seed("gltf",
+         "triangle_data_uri.gltf",
          triangle_gltf("data:application/octet-stream;base64," + base64(buffer), buffer.size()));
     seed("gltf", "triangle_bin.gltf", triangle_gltf("in.bin", buffer.size()) + kSep + buffer);
     seed("gltf", "empty_object.gltf", R"({"asset":{"version":"2.0"}})");
@@ -126,13 +131,16 @@ void gltf_seeds() {
 }
 
 void ply_seeds() {
-    seed("ply", "ascii_colour_uv.ply",
-         "ply\nformat ascii 1.0\ncomment c\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+    seed("ply",
+         "ascii_colour_uv.ply",
+         "ply\nformat ascii 1.0\ncomment c\nelement vertex 3\nproperty float x\nproperty float y\nproperty "
+         "float z\n"
          "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float s\nproperty float t\n"
          "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
          "0 0 0 255 0 0 0 0\n1 0 0 0 255 0 1 0\n0 1 0 0 0 255 0 1\n3 0 1 2\n");
     std::string binary =
-        "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+        "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float "
+        "y\nproperty float z\n"
         "element face 1\nproperty list uchar uint vertex_indices\nend_header\n";
     const float p[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
     for (float v : p) put(binary, v);
@@ -140,7 +148,8 @@ void ply_seeds() {
     for (std::uint32_t i : {0u, 1u, 2u, 3u}) put(binary, i);
     seed("ply", "binary_quad.ply", binary);
     std::string big =
-        "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+        "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty "
+        "double z\n"
         "element face 1\nproperty list uchar short vertex_indices\nend_header\n";
     const double q[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     for (double v : q) {
@@ -151,8 +160,10 @@ void ply_seeds() {
     big += '\x03';
     for (int i : {0, 1, 2}) big += std::string{'\0', char(i)};
     seed("ply", "binary_big_endian.ply", big);
-    seed("ply", "huge_count.ply",
-         "ply\nformat binary_little_endian 1.0\nelement vertex 2147483647\nproperty float x\nproperty float y\n"
+    seed("ply",
+         "huge_count.ply",
+         "ply\nformat binary_little_endian 1.0\nelement vertex 2147483647\nproperty float x\nproperty float "
+         "y\n"
          "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n");
 }
 
@@ -181,8 +192,8 @@ void image_seeds() {
     seed("image", "truncated.png", read_text_file(png8).substr(0, 40));
 }
 
-std::string npy(const std::string& descr, const std::string& shape, const std::string& data, bool fortran = false,
-                int major = 1) {
+std::string npy(const std::string& descr, const std::string& shape, const std::string& data,
+                bool fortran = false, int major = 1) {
     std::string header = "{'descr': '" + descr + "', 'fortran_order': " + (fortran ? "True" : "False") +
                          ", 'shape': " + shape + ", }";
     const std::size_t prefix = major == 1 ? 10 : 12;
@@ -216,7 +227,8 @@ std::string zip(const std::vector<std::pair<std::string, std::string>>& members,
             deflateEnd(&s);
             data = buffer;
         }
-        const std::uint32_t crc = std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(raw.data()), uInt(raw.size())));
+        const std::uint32_t crc =
+            std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(raw.data()), uInt(raw.size())));
         const std::uint32_t local = std::uint32_t(out.size());
         put(out, std::uint32_t(0x04034b50));
         put(out, std::uint16_t(20));
@@ -268,7 +280,8 @@ void npy_seeds() {
     std::string f4;
     for (int i = 0; i < 12; ++i) put(f4, float(i) * 0.25f);
     seed("npy", "f4_fortran_2x3x2.npy", npy("<f4", "(2, 3, 2)", f4, true));
-    seed("npy", "i2_big_endian.npy", npy(">i2", "(2, 2)", std::string("\x00\x01\x00\x02\xff\xff\x80\x00", 8)));
+    seed(
+        "npy", "i2_big_endian.npy", npy(">i2", "(2, 2)", std::string("\x00\x01\x00\x02\xff\xff\x80\x00", 8)));
     seed("npy", "u1_v2.npy", npy("|u1", "(3,)", "abc", false, 2));
     seed("npy", "f2_scalar.npy", npy("<f2", "()", std::string("\x00\x3c", 2)));
     seed("npy", "b1.npy", npy("|b1", "(2,)", std::string("\x00\x01", 2)));
@@ -299,20 +312,25 @@ void tmd_seeds() {
 
 void scene_seeds() {
     seed("scene", "minimal.json", R"({"mesh": "m.obj"})");
-    seed("scene", "full.json",
-         R"({"mesh": "m.glb", "normalize": true, "normalize_bound": 0.8, "tangents": "reference",)"
-         R"( "albedo": {"source": "constant", "color": [0.5, 0.2, 0.1]}, "tactile": {"images": ["t.png"]},)"
-         R"( "label_map": "l.png", "image": {"width": 64, "height": 32}, "ssaa": 2, "shading": "training",)"
-         R"( "background": 1, "passes": ["albedo", "mask"], "seed": 7,)"
-         R"( "views": {"radius": 2.5, "fovy": 40, "target": [0, 0, 0], "orbit": [{"elevation": 10, "azimuth": 20}],)"
-         R"( "turntable": {"count": 4, "elevation": 5}, "random": {"count": 2, "ssaa": true},)"
-         R"( "patches": {"count": 1, "reference_flip": true}},)"
-         R"( "light": {"mode": "magic3d", "ambient": 0.3, "position": [0, 1, 2]}, "optimize": {"iterations": 3}})");
-    seed("scene", "overrides.json",
+    seed(
+        "scene",
+        "full.json",
+        R"({"mesh": "m.glb", "normalize": true, "normalize_bound": 0.8, "tangents": "reference",)"
+        R"( "albedo": {"source": "constant", "color": [0.5, 0.2, 0.1]}, "tactile": {"images": ["t.png"]},)"
+        R"( "label_map": "l.png", "image": {"width": 64, "height": 32}, "ssaa": 2, "shading": "training",)"
+        R"( "background": 1, "passes": ["albedo", "mask"], "seed": 7,)"
+        R"( "views": {"radius": 2.5, "fovy": 40, "target": [0, 0, 0], "orbit": [{"elevation": 10, "azimuth": 20}],)"
+        R"( "turntable": {"count": 4, "elevation": 5}, "random": {"count": 2, "ssaa": true},)"
+        R"( "patches": {"count": 1, "reference_flip": true}},)"
+        R"( "light": {"mode": "magic3d", "ambient": 0.3, "position": [0, 1, 2]}, "optimize": {"iterations": 3}})");
+    seed("scene",
+         "overrides.json",
          R"({"mesh": "m.obj", "image": {"width": 16}})" + kSep +
              "image.height=8\nviews.orbit=[]\npasses=[\"albedo\"]\nseed=3\nmesh=other.obj\n");
-    seed("scene", "parent.json", R"({"parent": "base.json", "ssaa": 1.5})" + kSep + "light.mode=point\n" + kSep +
-                                     R"({"mesh": "m.ply", "views": {"turntable": {"count": 2}}})");
+    seed("scene",
+         "parent.json",
+         R"({"parent": "base.json", "ssaa": 1.5})" + kSep + "light.mode=point\n" + kSep +
+             R"({"mesh": "m.ply", "views": {"turntable": {"count": 2}}})");
     seed("scene", "bad_values.json", R"({"mesh": "m.obj", "seed": 18446744073709551615, "ssaa": 1e999})");
     seed("scene", "duplicate_keys.json", R"({"mesh": "m.obj", "mesh": "n.obj"})");
 }

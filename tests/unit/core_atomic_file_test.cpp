@@ -1,7 +1,6 @@
+#include <gtest/gtest.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
-
-#include <gtest/gtest.h>
 
 #include <filesystem>
 

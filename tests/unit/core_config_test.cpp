@@ -68,7 +68,8 @@ TEST(Config, DuplicateKeysAreErrorsNamingTheKey) {
         parse_json(R"({"mesh": "a.obj", "views": {"radius": 2, "radius": 3}})", "dup.json");
         FAIL() << "duplicate key accepted";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("dup.json: duplicate key 'views.radius'"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("dup.json: duplicate key 'views.radius'"), std::string::npos)
+            << e.what();
     }
     // The same key in different objects (and in objects inside arrays) is fine.
     const Json ok = parse_json(R"({"a": {"x": 1}, "b": {"x": 2}, "l": [{"x": 1}, {"x": 2}]})", "ok.json");
@@ -94,7 +95,8 @@ TEST(Config, NumbersOutOfRangeNameTheSourceOrKey) {
         EXPECT_NE(std::string(e.what()).find("override 'ssaa=1e999'"), std::string::npos) << e.what();
     }
     // Integers: 2^64 - 1 is a valid unsigned 64-bit value, -1 is not, and nothing wraps.
-    const Json values = parse_json(R"({"seed": 18446744073709551615, "neg": -1, "big": 4294967808})", "v.json");
+    const Json values =
+        parse_json(R"({"seed": 18446744073709551615, "neg": -1, "big": 4294967808})", "v.json");
     ConfigReader reader(values, "v.json");
     EXPECT_EQ(reader.get<std::uint64_t>("seed", 0), 18446744073709551615ull);
     EXPECT_THROW(reader.get<std::int64_t>("seed", 0), Error);

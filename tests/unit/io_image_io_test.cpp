@@ -1,9 +1,6 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
-
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
@@ -11,6 +8,8 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 

@@ -189,9 +189,12 @@ TEST(GltfIo, PositionMustBeFloat) {
     const std::string ubyte = write_edited_gltf("pos_ubyte", 0, {{"componentType", 5121}});
     const std::string message = gltf_error(ubyte);
     EXPECT_NE(message.find("pos_ubyte.gltf"), std::string::npos) << message;
-    EXPECT_NE(message.find("POSITION has component type UNSIGNED_BYTE, expected FLOAT"), std::string::npos) << message;
-    const std::string normalized = gltf_error(write_edited_gltf("pos_ushort", 0, {{"componentType", 5123}, {"normalized", true}}));
-    EXPECT_NE(normalized.find("POSITION has component type UNSIGNED_SHORT (normalized)"), std::string::npos) << normalized;
+    EXPECT_NE(message.find("POSITION has component type UNSIGNED_BYTE, expected FLOAT"), std::string::npos)
+        << message;
+    const std::string normalized =
+        gltf_error(write_edited_gltf("pos_ushort", 0, {{"componentType", 5123}, {"normalized", true}}));
+    EXPECT_NE(normalized.find("POSITION has component type UNSIGNED_SHORT (normalized)"), std::string::npos)
+        << normalized;
     // TEXCOORD_0 as non-normalized bytes is invalid too; normalized bytes are allowed.
     EXPECT_NE(gltf_error(write_edited_gltf("uv_ubyte", 1, {{"componentType", 5121}})).find("TEXCOORD_0"),
               std::string::npos);
@@ -201,7 +204,8 @@ TEST(GltfIo, HugeAccessorCountIsRefusedBeforeAllocating) {
     for (const std::int64_t count : {std::int64_t(2147483647), std::int64_t(1) << 40}) {
         const std::string path = write_edited_gltf("count_" + std::to_string(count), 0, {{"count", count}});
         const std::string message = gltf_error(path);
-        EXPECT_NE(message.find(std::filesystem::path(path).filename().string()), std::string::npos) << message;
+        EXPECT_NE(message.find(std::filesystem::path(path).filename().string()), std::string::npos)
+            << message;
         EXPECT_NE(message.find("POSITION"), std::string::npos) << message;
     }
     // A byte stride beyond the buffer cannot wrap around either.

@@ -1,14 +1,13 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_io.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 
@@ -91,9 +90,10 @@ TEST(ObjIo, NanTextureIsAnErrorNamingTheTexture) {
     const std::string exr = test::scratch_dir() + "/nan_texture.exr";
     write_exr(exr, texture);
     write_file("nan_texture.mtl", "newmtl m\nmap_Kd nan_texture.exr\n");
-    const std::string path = write_file("nan_texture.obj",
-                                        "mtllib nan_texture.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
-                                        "f 1/1 2/2 3/3\n");
+    const std::string path =
+        write_file("nan_texture.obj",
+                   "mtllib nan_texture.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                   "f 1/1 2/2 3/3\n");
     try {
         load_mesh(path);
         FAIL() << "a NaN texture was accepted";

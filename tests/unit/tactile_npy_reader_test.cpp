@@ -199,7 +199,8 @@ TEST(NpyReader, ValueBeyondFloatRangeIsAnErrorNamingTheFile) {
     EXPECT_NE(message.find("row 1, column 2"), std::string::npos) << message;
     EXPECT_NE(message.find("32-bit float"), std::string::npos) << message;
     values[6] = 3e38;  // still a float
-    EXPECT_NO_THROW(load_height_input(write_file("large_value.npy", npy_bytes("<f8", "(4, 4)", raw(values)))));
+    EXPECT_NO_THROW(
+        load_height_input(write_file("large_value.npy", npy_bytes("<f8", "(4, 4)", raw(values)))));
 }
 
 TEST(NpyReader, NpzMemberWithBadCrcIsRefused) {
@@ -222,7 +223,8 @@ TEST(NpyReader, NpzMemberWithBadCrcIsRefused) {
 
 TEST(NpyReader, HugeClaimedSizesAreRefusedBeforeAllocating) {
     // Shape entries within bounds whose product overflows 64 bits.
-    const std::string overflow = npy_bytes("<f8", "(1099511627776, 1099511627776, 1099511627776)", std::string(64, '\0'));
+    const std::string overflow =
+        npy_bytes("<f8", "(1099511627776, 1099511627776, 1099511627776)", std::string(64, '\0'));
     EXPECT_NE(error_of([&] { parse_npy(overflow, "overflow.npy"); }).find("overflow.npy"), std::string::npos);
     // A deflated member claiming 4 GB uncompressed from a few bytes.
     std::string zip = zip_bytes({{"dm.npy", std::string(64, 'a')}}, true);

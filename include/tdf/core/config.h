@@ -5,11 +5,10 @@
 /// Overrides use dotted paths into the JSON: `image.width=256`, `views.mode=turntable`,
 /// `seed=7`. The value is parsed as JSON when it can be (numbers, true/false, arrays,
 /// quoted strings) and taken as a plain string otherwise (`mesh=meshes/cow.obj`).
-#include <nlohmann/json.hpp>
-
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <vector>
@@ -51,7 +50,8 @@ public:
 
 private:
     [[noreturn]] void type_error(const std::string& key, const char* expected) const;
-    [[noreturn]] void range_error(const std::string& key, const std::string& low, const std::string& high) const;
+    [[noreturn]] void range_error(const std::string& key, const std::string& low,
+                                  const std::string& high) const;
 
     const Json* m_object;
     std::string m_where;
@@ -89,7 +89,8 @@ T ConfigReader::require(const std::string& key) {
                     fits = v >= 0 && std::uint64_t(v) <= std::uint64_t(std::numeric_limits<T>::max());
             }
             if (!fits)
-                range_error(key, std::to_string(std::numeric_limits<T>::min()),
+                range_error(key,
+                            std::to_string(std::numeric_limits<T>::min()),
                             std::to_string(std::numeric_limits<T>::max()));
         } else if constexpr (std::is_floating_point_v<T>) {
             if (!value.is_number()) type_error(key, "a number");
