@@ -9,6 +9,14 @@ if(TDF_SANITIZE)
   target_link_options(tdf_warnings INTERFACE -fsanitize=address,undefined)
 endif()
 
+if(TDF_FUZZ)
+  # Coverage instrumentation for libFuzzer plus ASan/UBSan in every library; the harnesses
+  # (tests/fuzz) link the fuzzer runtime. UB aborts so the fuzzer records it as a crash.
+  target_compile_options(tdf_warnings INTERFACE -fsanitize=fuzzer-no-link,address,undefined
+                         -fno-sanitize-recover=all -fno-omit-frame-pointer -gline-tables-only)
+  target_link_options(tdf_warnings INTERFACE -fsanitize=address,undefined)
+endif()
+
 # tdf_add_module(<name> DEPS <targets...>)
 # One static library per pipeline stage: sources are src/<name>/*.cpp, public headers
 # include/tdf/<name>/*.h. A folder with no sources yet becomes an INTERFACE library.

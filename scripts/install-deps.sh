@@ -13,7 +13,7 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libcgal-dev libeigen3-dev \
   libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev libfftw3-dev nlohmann-json3-dev libcli11-dev \
   libfmt-dev libtinygltf-dev libpng-dev libjpeg-dev zlib1g-dev chromium \
-  slurm-wlm munge >/dev/null
+  slurm-wlm munge clang libclang-rt-14-dev >/dev/null  # clang: the libFuzzer job (scripts/fuzz.sh)
 # Node for the HTML reports' scripts and their browser tests (Debian's, unless a node is present).
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
   $SUDO apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null

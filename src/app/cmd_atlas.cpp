@@ -37,6 +37,8 @@ int run_atlas(const AtlasCommandOptions& o) {
     if (!o.texture.empty()) {
         mesh.albedo = read_image(o.texture);
         mesh.albedo_path = o.texture;
+        if (!mesh.albedo.all_finite())
+            throw_error("--texture {}: the texture contains NaN or infinite values", o.texture);
     }
     AtlasReport report;
     const TriangleMesh atlas = build_atlas(mesh, atlas_options, &report);

@@ -75,6 +75,7 @@ Json thresholds_json(const CompareCliOptions& o) {
 std::string psnr_text(double psnr) { return std::isinf(psnr) ? "inf" : fmt::format("{:.2f}", psnr); }
 
 int run_compare_files(const CompareCliOptions& o) {
+    if (!o.diff.empty()) check_output_extension(o.diff, {".exr"}, "--diff (a multi-layer float image)");
     const std::vector<ExrLayer> a = read_comparable_image(o.a);
     const std::vector<ExrLayer> b = read_comparable_image(o.b);
     if (a.empty()) throw_error("{}: no layers", o.a);

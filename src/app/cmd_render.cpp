@@ -6,6 +6,7 @@
 #include <tdf/io/image_io.h>
 #include <tdf/render/scene_assets.h>
 #include <tdf/train/run_guard.h>
+#include <tdf/scene/scene_file.h>
 
 #include <filesystem>
 #include <regex>
@@ -119,8 +120,8 @@ Command register_render(CLI::App& root) {
         ->capture_default_str();
     app->add_option("--turntable",
                     options->turntable,
-                    "replace the scene's views by N azimuths 360k/N at views.turntable.elevation")
-        ->check(CLI::NonNegativeNumber)
+                    "replace the scene's views by N azimuths 360k/N at views.turntable.elevation (at most 10000)")
+        ->check(CLI::Range(0, kMaxSceneViews))
         ->capture_default_str();
     app->add_option(
            "--renderer",

@@ -120,8 +120,8 @@ struct PatchArgs {
         app->add_option("--patch-size",
                         size,
                         "patch side after resampling in pixels: auto (256 for captures, else keep the "
-                        "resolution), 0 = keep the crop")
-            ->check(CLI::IsMember({"auto"}) | CLI::NonNegativeNumber)
+                        "resolution), 0 = keep the crop; at most 4096")
+            ->check(CLI::IsMember({"auto"}) | CLI::Range(0, 4096))
             ->capture_default_str();
     }
     PatchOptions resolved() const {
@@ -147,8 +147,8 @@ struct QuiltArgs {
         options.tileable = convert_defaults;
         if (convert_defaults) options.min_contrast = 0.9f, options.feather = 2, block = "auto";
         app->add_option(
-               "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride)")
-            ->check(CLI::PositiveNumber)
+               "--size", options.size, "output side in pixels (tileable: nearest multiple of the stride), at most 8192")
+            ->check(CLI::Range(1, 8192))
             ->capture_default_str();
         app->add_option("--block",
                         block,
@@ -351,12 +351,18 @@ void run_quilt(const State& s) {
     log_info("wrote {} ({}x{})", s.out, quilted.height.width(), quilted.height.height());
 }
 
+void require_normal_map_name(const std::string& path) {
+    check_output_extension(path, {".png", ".exr"}, "a normal map (-o)");
+}
+
 void run_normal(const State& s) {
+    require_normal_map_name(s.out);
     const HeightMap map = s.input.load(s.in).map;
     s.normal.write(s.out, map, s.normal.resolve_strength(map));
 }
 
 void run_convert(const State& s) {
+    require_normal_map_name(s.out);
     if (s.no_quilt && s.inputs.size() > 1)
         throw_error("--no-quilt makes a normal map of one patch, but {} inputs were given", s.inputs.size());
     const PatchOptions patch_options = s.patch.resolved();

@@ -6,12 +6,14 @@
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/core/parallel.h>
+#include <tdf/core/progress.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <numeric>
 #include <queue>
 #include <unordered_map>
@@ -539,18 +541,52 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
         const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
             return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
         };
+        // Progress in fixed stage weights (on a 1M-triangle sphere flattening takes most of
+        // the time); flattening advances per batch of charts.
+        constexpr std::size_t kSurface = 5, kGrow = 10, kFlatten = 60, kPack = 25;
+        // Meshes that unwrap in about a second stay quiet.
+        constexpr std::size_t kProgressFaces = 50000;
+        std::unique_ptr<ProgressReporter> reporter;
+        if (mesh.triangles.size() >= kProgressFaces)
+            reporter = std::make_unique<ProgressReporter>("atlas", kSurface + kGrow + kFlatten + kPack, 1);
+        const auto advance = [&](std::size_t n, const std::string& status) {
+            if (reporter) reporter->advance(n, status);
+        };
         const Surface surface = analyse_surface(mesh);
+        advance(kSurface, fmt::format("{} faces analysed", mesh.triangles.size()));
         std::vector<std::vector<int>> pending = grow_charts(surface, options);
+        advance(kGrow, fmt::format("{} charts grown", pending.size()));
         log_verbose("atlas: {} charts grown in {:.2f} s", pending.size(), seconds_since(start));
         const auto flatten_start = std::chrono::steady_clock::now();
         std::vector<FlatChart> charts;
         // Rounds of parallel flattening; failed charts come back split. Results are collected
-        // in list order, so the atlas does not depend on the thread count.
+        // in list order, so the atlas does not depend on the thread count. Each round runs in
+        // batches so that progress moves; a round gets half of the flattening weight still
+        // left (the number of rounds is not known in advance: charts that fail come back split).
+        std::size_t flatten_credit = kFlatten;
         while (!pending.empty()) {
+            const std::size_t round_budget =
+                std::max<std::size_t>(flatten_credit / 2, flatten_credit > 0 ? 1 : 0);
+            std::size_t round_credit = round_budget;
             std::vector<FlattenOutcome> outcomes(pending.size());
-            parallel_for(pending.size(), 1, [&](std::size_t begin, std::size_t end) {
-                for (std::size_t i = begin; i < end; ++i) outcomes[i] = flatten(surface, pending[i], options);
-            });
+            // Batches of at least 4 charts per thread, so that batching never idles a thread
+            // (charts are independent: batching does not change the result).
+            constexpr std::size_t kBatches = 20;
+            const std::size_t batch =
+                std::max<std::size_t>((pending.size() + kBatches - 1) / kBatches,
+                                      4 * std::size_t(std::max(1, ThreadLimit::current())));
+            for (std::size_t first = 0; first < pending.size(); first += batch) {
+                const std::size_t last = std::min(pending.size(), first + batch);
+                parallel_for(last - first, 1, [&](std::size_t begin, std::size_t end) {
+                    for (std::size_t i = first + begin; i < first + end; ++i)
+                        outcomes[i] = flatten(surface, pending[i], options);
+                });
+                const std::size_t share = round_budget * (last - first) / pending.size();
+                const std::size_t step = std::min(round_credit, std::max<std::size_t>(share, 1));
+                round_credit -= step;
+                flatten_credit -= step;
+                advance(step, fmt::format("flattened {}/{} charts", last, pending.size()));
+            }
             std::vector<std::vector<int>> next;
             for (FlattenOutcome& o : outcomes) {
                 if (o.ok)
@@ -560,9 +596,12 @@ TriangleMesh build_atlas(const TriangleMesh& mesh, const AtlasOptions& options, 
             }
             pending.swap(next);
         }
+        advance(flatten_credit, fmt::format("{} charts flattened", charts.size()));
         log_verbose("atlas: {} charts flattened in {:.2f} s", charts.size(), seconds_since(flatten_start));
         const auto pack_start = std::chrono::steady_clock::now();
         out = assemble(mesh, surface, charts, options);
+        advance(kPack, "packed");
+        if (reporter) reporter->finish();
         log_verbose("atlas: packed in {:.2f} s", seconds_since(pack_start));
         if (out.normals.size() != out.positions.size()) compute_normals(out);
         compute_tangents(out, TangentMode::Handed);

@@ -25,6 +25,9 @@ void ensure_folder(const std::string& folder) {
 void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write) {
     static std::atomic<unsigned> counter{0};
     const fs::path final_path(path);
+    std::error_code status_error;
+    if (fs::is_directory(final_path, status_error))
+        throw_error("cannot write '{}': it is a folder, not a file name", path);
     ensure_folder(final_path.parent_path().string());
     const fs::path temporary = final_path.parent_path() /
                                (final_path.stem().string() + ".tmp" + std::to_string(getpid()) + "_" +
@@ -39,8 +42,10 @@ void write_atomically(const std::string& path, const std::function<void(const st
     std::error_code ec;
     fs::rename(temporary, final_path, ec);
     if (ec) {
-        fs::remove(temporary, ec);
-        throw_error("cannot write '{}': rename failed: {}", path, ec.message());
+        const std::string reason = ec.message();  // before remove() reuses `ec`
+        std::error_code ignored;
+        fs::remove(temporary, ignored);
+        throw_error("cannot write '{}': rename failed: {}", path, reason);
     }
 }
 
@@ -55,6 +60,8 @@ void write_text_atomically(const std::string& path, const std::string& text) {
 }
 
 std::string read_text_file(const std::string& path) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw_error("cannot read '{}': it is a folder", path);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw_error("cannot open '{}': {}", path, std::strerror(errno));
     std::ostringstream ss;

@@ -1,20 +1,70 @@
-#include <tdf/core/config.h>
-
 #include <tdf/core/atomic_file.h>
+#include <tdf/core/config.h>
 #include <tdf/core/error.h>
 
 #include <filesystem>
+#include <functional>
 
 namespace tdf {
 
+namespace {
+
+// Duplicate keys are legal JSON but nlohmann keeps the last silently; a scene with two "mesh"
+// keys is a mistake to report, not to guess at. The parser callback sees every key in order.
+class DuplicateKeyCheck {
+public:
+    explicit DuplicateKeyCheck(std::string source) : m_source(std::move(source)) {}
+    bool operator()(int /*depth*/, Json::parse_event_t event, Json& parsed) {
+        switch (event) {
+            case Json::parse_event_t::object_start:
+                m_objects.emplace_back();
+                break;
+            case Json::parse_event_t::object_end:
+                if (!m_objects.empty()) m_objects.pop_back();
+                break;
+            case Json::parse_event_t::key: {
+                if (m_objects.empty()) break;
+                Frame& frame = m_objects.back();
+                frame.current = parsed.get<std::string>();
+                if (!frame.keys.insert(frame.current).second) {
+                    std::string path;
+                    for (const auto& f : m_objects) path += (path.empty() ? "" : ".") + f.current;
+                    throw_error("{}: duplicate key '{}'", m_source, path);
+                }
+                break;
+            }
+            default:
+                break;
+        }
+        return true;
+    }
+
+private:
+    struct Frame {
+        std::set<std::string> keys;
+        std::string current;
+    };
+    std::string m_source;  // a copy: callers pass temporaries (found by fuzzing)
+    std::vector<Frame> m_objects;
+};
+
+// nlohmann's what() is "[json.exception.parse_error.101] parse error at line 3, column 5: ...";
+// keep the part after the bracket.
+std::string json_message(const nlohmann::json::exception& e) {
+    const std::string what = e.what();
+    const auto at = what.find("] ");
+    return at == std::string::npos ? what : what.substr(at + 2);
+}
+
+}  // namespace
+
 Json parse_json(const std::string& text, const std::string& source) {
     try {
-        return Json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        // e.what() is "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
-        std::string what = e.what();
-        const auto at = what.find("] ");
-        throw_error("{}: invalid JSON: {}", source, at == std::string::npos ? what : what.substr(at + 2));
+        DuplicateKeyCheck check(source);
+        return Json::parse(text, std::ref(check));
+    } catch (const nlohmann::json::exception& e) {
+        // Also out_of_range.406 for a number literal such as 1e999.
+        throw_error("{}: invalid JSON: {}", source, json_message(e));
     }
 }
 
@@ -51,11 +101,23 @@ void apply_override(Json& config, const std::string& assignment) {
     const auto eq = assignment.find('=');
     if (eq == std::string::npos || eq == 0)
         throw_error("override '{}' is not of the form key=value", assignment);
+    // JSON text is UTF-8; a bare-string value or key that is not would make every later dump()
+    // of the configuration throw (found by fuzzing).
+    try {
+        (void)Json(assignment).dump();
+    } catch (const nlohmann::json::exception&) {
+        throw_error("override '{}' is not valid UTF-8 text", assignment);
+    }
     const std::string key = assignment.substr(0, eq);
     const std::string text = assignment.substr(eq + 1);
     Json value;
     try {
-        value = Json::parse(text);
+        DuplicateKeyCheck check("override '" + assignment + "'");
+        value = Json::parse(text, std::ref(check));
+    } catch (const Error&) {
+        throw;
+    } catch (const nlohmann::json::out_of_range& e) {
+        throw_error("override '{}': {}", assignment, json_message(e));
     } catch (const nlohmann::json::exception&) {
         value = text;  // a bare string such as a path
     }
@@ -110,6 +172,12 @@ void ConfigReader::check_all_read() const {
     for (auto it = m_object->begin(); it != m_object->end(); ++it)
         if (!m_read.count(it.key())) unknown += (unknown.empty() ? "'" : ", '") + it.key() + "'";
     if (!unknown.empty()) throw_error("{}: unknown key(s) {}", m_where, unknown);
+}
+
+void ConfigReader::range_error(const std::string& key, const std::string& low,
+                               const std::string& high) const {
+    throw_error(
+        "{}: '{}' must be an integer in [{}, {}], got {}", m_where, key, low, high, (*m_object)[key].dump());
 }
 
 void ConfigReader::type_error(const std::string& key, const char* expected) const {

@@ -48,6 +48,47 @@ FilePtr open_file(const std::string& path, const char* mode) {
     return f;
 }
 
+// Decoded images are checked against kMaxImageSide / kMaxImagePixels and against the file size
+// before any pixel buffer is allocated: a 60-byte PNG header may claim 200000 x 200000 pixels.
+// The codecs' densest encodings stay below ~2000 decoded bytes per file byte (DEFLATE's limit
+// is 1032:1; a JPEG block costs at least one bit per 64 samples; EXR's PIZ run codes, counted
+// in half-float bytes, about 2000:1), so a header claiming more than 4096:1 is a truncated,
+// corrupt or hostile file and is refused before it costs memory.
+constexpr double kMaxDecodedBytesPerFileByte = 4096.0;
+
+std::uintmax_t file_size_or_zero(const std::string& path) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    return ec ? 0 : size;
+}
+
+// `decoded_bytes`: the size of the codec's decoded stream (PNG: filtered rows, JPEG: samples,
+// EXR: half-float samples).
+void check_image_size(const std::string& path, std::uint64_t file_size, const char* format,
+                      std::uint64_t width, std::uint64_t height, double decoded_bytes) {
+    if (width == 0 || height == 0)
+        throw_error("cannot read {} '{}': the image is empty ({}x{})", format, path, width, height);
+    if (width > std::uint64_t(kMaxImageSide) || height > std::uint64_t(kMaxImageSide) ||
+        width * height > std::uint64_t(kMaxImagePixels))
+        throw_error("cannot read {} '{}': {}x{} pixels is over the limit ({} per side, {} in all)",
+                    format,
+                    path,
+                    width,
+                    height,
+                    kMaxImageSide,
+                    kMaxImagePixels);
+    const double file = double(file_size);
+    if (decoded_bytes > kMaxDecodedBytesPerFileByte * file + 65536.0)
+        throw_error(
+            "cannot read {} '{}': the header claims {}x{} pixels but the file has only {} bytes "
+            "(truncated or corrupt)",
+            format,
+            path,
+            width,
+            height,
+            std::uint64_t(file));
+}
+
 // ---- PNG -------------------------------------------------------------------------------------
 
 struct PngErrorContext {
@@ -62,8 +103,8 @@ void png_error_handler(png_structp png, png_const_charp message) {
 }
 void png_warning_handler(png_structp, png_const_charp) {}
 
-Image read_png(const std::string& path, ImageMetadata* metadata = nullptr) {
-    FilePtr file = open_file(path, "rb");
+// `file` holds the image (a file or memory); `path` names it in messages.
+Image read_png(std::FILE* file, const std::string& path, std::uint64_t file_size, ImageMetadata* metadata) {
     PngErrorContext context{path, {}};
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler,
                                              png_warning_handler);
@@ -75,12 +116,19 @@ Image read_png(const std::string& path, ImageMetadata* metadata = nullptr) {
         png_destroy_read_struct(&png, &info, nullptr);
         throw_error("cannot read PNG '{}': {}", path, context.message);
     }
-    png_init_io(png, file.get());
+    png_init_io(png, file);
     png_read_info(png, info);
     const png_uint_32 width = png_get_image_width(png, info);
     const png_uint_32 height = png_get_image_height(png, info);
     const int color_type = png_get_color_type(png, info);
     int bit_depth = png_get_bit_depth(png, info);
+    try {
+        check_image_size(
+            path, file_size, "PNG", width, height, double(png_get_rowbytes(png, info) + 1) * double(height));
+    } catch (...) {
+        png_destroy_read_struct(&png, &info, nullptr);
+        throw;
+    }
     if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
     if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
     if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
@@ -186,8 +234,7 @@ void jpeg_error_exit(j_common_ptr cinfo) {
     std::longjmp(err->jump, 1);
 }
 
-Image read_jpeg(const std::string& path) {
-    FilePtr file = open_file(path, "rb");
+Image read_jpeg(std::FILE* file, const std::string& path, std::uint64_t file_size) {
     jpeg_decompress_struct cinfo;
     JpegError err;
     cinfo.err = jpeg_std_error(&err.base);
@@ -198,9 +245,21 @@ Image read_jpeg(const std::string& path) {
         throw_error("cannot read JPEG '{}': {}", path, err.message);
     }
     jpeg_create_decompress(&cinfo);
-    jpeg_stdio_src(&cinfo, file.get());
+    jpeg_stdio_src(&cinfo, file);
     jpeg_read_header(&cinfo, TRUE);
     if (cinfo.num_components != 1) cinfo.out_color_space = JCS_RGB;
+    try {
+        check_image_size(
+            path,
+            file_size,
+            "JPEG",
+            cinfo.image_width,
+            cinfo.image_height,
+            double(cinfo.image_width) * double(cinfo.image_height) * double(cinfo.num_components));
+    } catch (...) {
+        jpeg_destroy_decompress(&cinfo);
+        throw;
+    }
     jpeg_start_decompress(&cinfo);
     const int width = int(cinfo.output_width), height = int(cinfo.output_height);
     const int channels = int(cinfo.output_components);
@@ -214,6 +273,42 @@ Image read_jpeg(const std::string& path) {
     Image image(width, height, channels);
     for (std::size_t i = 0; i < buffer.size(); ++i) image.data()[i] = float(buffer[i]) / 255.0f;
     return image;
+}
+
+void write_jpeg_file(const std::string& path, const Image& image, int quality) {
+    FilePtr file = open_file(path, "wb");
+    jpeg_compress_struct cinfo;
+    JpegError err;
+    cinfo.err = jpeg_std_error(&err.base);
+    err.base.error_exit = jpeg_error_exit;
+    // No locals live across setjmp other than these (gcc's -Wclobbered).
+    std::vector<unsigned char> row(std::size_t(image.width()) * 3);
+    if (setjmp(err.jump)) {
+        jpeg_destroy_compress(&cinfo);
+        throw_error("cannot write JPEG '{}': {}", path, err.message);
+    }
+    jpeg_create_compress(&cinfo);
+    jpeg_stdio_dest(&cinfo, file.get());
+    cinfo.image_width = JDIMENSION(image.width());
+    cinfo.image_height = JDIMENSION(image.height());
+    cinfo.input_components = image.channels() >= 3 ? 3 : 1;
+    cinfo.in_color_space = cinfo.input_components == 3 ? JCS_RGB : JCS_GRAYSCALE;
+    jpeg_set_defaults(&cinfo);
+    jpeg_set_quality(&cinfo, quality, TRUE);
+    jpeg_start_compress(&cinfo, TRUE);
+    while (cinfo.next_scanline < cinfo.image_height) {
+        const int y = int(cinfo.next_scanline);
+        for (int x = 0; x < image.width(); ++x)
+            for (int c = 0; c < cinfo.input_components; ++c)
+                row[std::size_t(x * cinfo.input_components + c)] =
+                    static_cast<unsigned char>(quantize_value(image.at(x, y, c), 255.0f, Quantize::Round));
+        JSAMPROW pointer = row.data();
+        jpeg_write_scanlines(&cinfo, &pointer, 1);
+    }
+    jpeg_finish_compress(&cinfo);
+    jpeg_destroy_compress(&cinfo);
+    if (std::fflush(file.get()) != 0 || std::ferror(file.get()))
+        throw_error("cannot write JPEG '{}': {} (disk full?)", path, std::strerror(errno));
 }
 
 // ---- EXR -------------------------------------------------------------------------------------
@@ -255,8 +350,14 @@ Image read_image(const std::string& path, ImageMetadata& metadata) {
         FilePtr file = open_file(path, "rb");
         if (std::fread(magic, 1, 4, file.get()) != 4) throw_error("cannot read image '{}': file is too short", path);
     }
-    if (magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') return read_png(path, &metadata);
-    if (magic[0] == 0xFF && magic[1] == 0xD8) return read_jpeg(path);
+    if (magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') {
+        FilePtr file = open_file(path, "rb");
+        return read_png(file.get(), path, file_size_or_zero(path), &metadata);
+    }
+    if (magic[0] == 0xFF && magic[1] == 0xD8) {
+        FilePtr file = open_file(path, "rb");
+        return read_jpeg(file.get(), path, file_size_or_zero(path));
+    }
     if (magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) {
         std::vector<ExrLayer> layers = read_exr_layers(path, &metadata);
         int channels = 0;
@@ -275,12 +376,37 @@ Image read_image(const std::string& path, ImageMetadata& metadata) {
     throw_error("cannot read image '{}': not a PNG, JPEG or OpenEXR file", path);
 }
 
+Image decode_image(const std::string& bytes, const std::string& where) {
+    const auto* b = reinterpret_cast<const unsigned char*>(bytes.data());
+    const bool png = bytes.size() >= 4 && b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G';
+    const bool jpeg = bytes.size() >= 2 && b[0] == 0xFF && b[1] == 0xD8;
+    if (!png && !jpeg) throw_error("cannot read image '{}': not a PNG or JPEG", where);
+    FilePtr file(fmemopen(const_cast<char*>(bytes.data()), bytes.size(), "rb"));
+    if (!file) throw_error("cannot read image '{}': {}", where, std::strerror(errno));
+    return png ? read_png(file.get(), where, bytes.size(), nullptr)
+               : read_jpeg(file.get(), where, bytes.size());
+}
+
 void write_png(const std::string& path, const Image& image, int bits, Quantize quantize) {
     write_png(path, image, ImageMetadata{}, bits, quantize);
 }
 
+void check_output_extension(const std::string& path, const std::vector<std::string>& extensions,
+                            const std::string& what) {
+    const std::string ext = lower_extension(path);
+    if (std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) return;
+    std::string list;
+    for (const auto& e : extensions) list += (list.empty() ? "" : ", ") + e;
+    throw_error("{}: {} must be named {} (the extension chooses the format), got '{}'",
+                path,
+                what,
+                list,
+                ext.empty() ? "no extension" : ext);
+}
+
 void write_png(const std::string& path, const Image& image, const ImageMetadata& metadata, int bits,
                Quantize quantize) {
+    check_output_extension(path, {".png"}, "a PNG file");
     for (const auto& entry : metadata)
         if (entry.first.empty() || entry.first.size() > 79)
             throw_error("cannot write PNG '{}': metadata key '{}' must have 1 to 79 characters", path, entry.first);
@@ -291,10 +417,33 @@ void write_png(const std::string& path, const Image& image, const ImageMetadata&
     write_atomically(path, [&](const std::string& tmp) { write_png_file(tmp, image, bits, quantize, metadata); });
 }
 
+void write_jpeg(const std::string& path, const Image& image, int quality) {
+    check_output_extension(path, {".jpg", ".jpeg"}, "a JPEG file");
+    if (quality < 1 || quality > 100)
+        throw_error("cannot write JPEG '{}': quality must be in 1..100, got {}", path, quality);
+    if (image.empty() || image.channels() < 1 || image.channels() > 4)
+        throw_error("cannot write JPEG '{}': the image is empty or has {} channels (1 to 4 supported)",
+                    path,
+                    image.channels());
+    write_atomically(path, [&](const std::string& tmp) { write_jpeg_file(tmp, image, quality); });
+}
+
+void write_image(const std::string& path, const Image& image, int png_bits, Quantize quantize) {
+    check_output_extension(path, {".png", ".jpg", ".jpeg", ".exr"}, "an image");
+    const std::string ext = lower_extension(path);
+    if (ext == ".png")
+        write_png(path, image, png_bits, quantize);
+    else if (ext == ".exr")
+        write_exr(path, image);
+    else
+        write_jpeg(path, image);
+}
+
 namespace {
 
 void write_exr_file(const std::string& path, const std::vector<ExrLayer>& layers, ExrPixelType type,
                     const ImageMetadata& metadata) {
+    check_output_extension(path, {".exr"}, "an OpenEXR file");
     if (layers.empty()) throw_error("cannot write EXR '{}': no layers", path);
     const int width = layers[0].image.width(), height = layers[0].image.height();
     if (width <= 0 || height <= 0) throw_error("cannot write EXR '{}': the image is empty", path);
@@ -357,17 +506,206 @@ void write_exr(const std::string& path, const Image& image, const ImageMetadata&
     write_exr_file(path, {ExrLayer{"", default_channel_names(image.channels()), image}}, type, metadata);
 }
 
+namespace {
+
+// OpenEXR 3.1 allocates string, opaque and preview attributes at the size the file claims
+// before reading them, so a 300-byte file can make it allocate gigabytes (found by fuzzing).
+// The header is walked here first the way OpenEXR reads it -- fixed-size types consume their
+// own size whatever the declared one, a channel list is parsed to its terminating empty name,
+// everything else consumes the declared size -- and every claim is checked against the bytes
+// left in the file. Layout: magic, version, then per header a list of name\0 type\0 int32 size
+// + value ended by an empty name (multi-part files: a list of headers ended by an empty one).
+struct NeedMoreHeader {};
+
+// Walks the header in `bytes`, the first bytes of a file of `file_size` bytes; throws
+// NeedMoreHeader when the header runs past `bytes` and the file is longer.
+void walk_exr_header(const std::string& path, const std::string& bytes, std::uint64_t file_size) {
+    std::size_t at = 8;
+    if (bytes.size() < at) throw_error("cannot read EXR '{}': file is too short", path);
+    const bool multipart = (std::uint8_t(bytes[5]) & 0x10) != 0;  // version field bit 12
+    const auto truncated = [&]() {
+        if (bytes.size() < file_size) throw NeedMoreHeader{};
+        throw_error("cannot read EXR '{}': truncated or corrupt header", path);
+    };
+    const auto read_name = [&]() {
+        const std::size_t end = bytes.find('\0', at);
+        if (end == std::string::npos || end - at > 255) truncated();
+        std::string name = bytes.substr(at, end - at);
+        at = end + 1;
+        return name;
+    };
+    const auto read_i32 = [&]() {
+        if (bytes.size() - at < 4) truncated();
+        std::int32_t v;
+        std::memcpy(&v, bytes.data() + at, 4);
+        at += 4;
+        return std::int64_t(v);
+    };
+    static const std::map<std::string, std::size_t> kFixed = {{"box2i", 16},
+                                                              {"box2f", 16},
+                                                              {"compression", 1},
+                                                              {"lineOrder", 1},
+                                                              {"float", 4},
+                                                              {"double", 8},
+                                                              {"int", 4},
+                                                              {"v2i", 8},
+                                                              {"v2f", 8},
+                                                              {"v2d", 16},
+                                                              {"v3i", 12},
+                                                              {"v3f", 12},
+                                                              {"v3d", 24},
+                                                              {"m33f", 36},
+                                                              {"m33d", 72},
+                                                              {"m44f", 64},
+                                                              {"m44d", 128},
+                                                              {"tiledesc", 9},
+                                                              {"chromaticities", 32},
+                                                              {"envmap", 1},
+                                                              {"keycode", 28},
+                                                              {"timecode", 8},
+                                                              {"rational", 8},
+                                                              {"deepImageState", 1}};
+    // What OpenEXR allocates from once the header is read: the pixel window (line buffers) and
+    // the chunk offset table (one 8-byte offset per line block or tile, all stored in the file).
+    std::int64_t window[4] = {0, 0, -1, -1};
+    std::int64_t tile_x = 0, tile_y = 0, channels = 0;
+    bool have_window = false, tiled = false;
+    const auto check_header = [&]() {
+        if (!have_window) return;  // OpenEXR reports the missing attribute itself
+        const std::int64_t width = window[2] - window[0] + 1, height = window[3] - window[1] + 1;
+        if (width <= 0 || height <= 0) throw_error("cannot read EXR '{}': empty data window", path);
+        check_image_size(path,
+                         file_size,
+                         "EXR",
+                         std::uint64_t(width),
+                         std::uint64_t(height),
+                         2.0 * double(width) * double(height) * double(std::max<std::int64_t>(channels, 1)));
+        if (tiled && (tile_x <= 0 || tile_y <= 0))
+            throw_error("cannot read EXR '{}': tile size {}x{}", path, tile_x, tile_y);
+        const double chunks =
+            tiled ? std::ceil(double(width) / double(tile_x)) * std::ceil(double(height) / double(tile_y))
+                  : std::ceil(double(height) / 256.0);  // at most 256 lines per block (DWAB)
+        if (chunks * 8.0 > double(file_size))
+            throw_error("cannot read EXR '{}': its {} chunk offsets cannot fit in a file of {} bytes",
+                        path,
+                        std::uint64_t(chunks),
+                        file_size);
+        have_window = tiled = false;
+        channels = 0;
+    };
+    for (int header = 0; header < 1024; ++header) {
+        for (int attribute = 0;; ++attribute) {
+            const std::string name = read_name();
+            if (name.empty()) {
+                if (attribute == 0) return;  // end of a multi-part header list
+                check_header();
+                if (!multipart) return;
+                break;
+            }
+            if (attribute >= 65536) truncated();
+            const std::string type = read_name();
+            const std::int64_t size = read_i32();
+            const std::uint64_t left = file_size - std::min<std::uint64_t>(file_size, at);
+            if (size < 0 || std::uint64_t(size) > left)
+                throw_error(
+                    "cannot read EXR '{}': header attribute '{}' claims {} bytes, more than the file holds",
+                    path,
+                    name,
+                    size);
+            const auto fixed = kFixed.find(type);
+            if (fixed != kFixed.end()) {
+                if (bytes.size() - at < fixed->second) truncated();
+                if (name == "dataWindow" && type == "box2i") {
+                    for (std::int64_t& v : window) v = read_i32();
+                    have_window = true;
+                    at -= 16;
+                } else if (name == "tiles" && type == "tiledesc") {
+                    tile_x = std::uint32_t(read_i32());
+                    tile_y = std::uint32_t(read_i32());
+                    tiled = true;
+                    at -= 8;
+                }
+                at += fixed->second;
+            } else if (type == "chlist") {
+                while (!read_name().empty()) {  // name, then pixel type, linear + 3 reserved, x/y sampling
+                    if (bytes.size() - at < 16) truncated();
+                    at += 16;
+                    ++channels;
+                }
+            } else if (type == "preview") {
+                const std::int64_t width = std::uint32_t(read_i32()), height = std::uint32_t(read_i32());
+                if (double(width) * double(height) * 4.0 >
+                    double(file_size - std::min<std::uint64_t>(file_size, at)))
+                    throw_error("cannot read EXR '{}': preview image of {}x{} pixels is larger than the file",
+                                path,
+                                width,
+                                height);
+                at += std::size_t(width * height * 4);
+            } else {
+                at += std::size_t(size);  // string, stringvector, opaque and other sized types
+            }
+            if (at > bytes.size()) truncated();
+        }
+    }
+}
+
+void check_exr_header(const std::string& path) {
+    const std::uint64_t size = file_size_or_zero(path);
+    FilePtr file = open_file(path, "rb");
+    std::string bytes;
+    for (std::size_t want = 1 << 16;; want *= 4) {  // most headers are a few hundred bytes
+        const std::size_t have = bytes.size();
+        const std::size_t target = std::size_t(std::min<std::uint64_t>(size, want));
+        bytes.resize(std::max(target, have));
+        bytes.resize(have + std::fread(bytes.data() + have, 1, bytes.size() - have, file.get()));
+        const bool complete = bytes.size() < target || bytes.size() >= size;
+        try {
+            walk_exr_header(path, bytes, complete ? bytes.size() : size);
+            return;
+        } catch (const NeedMoreHeader&) {
+            // only thrown while the file has more bytes than were read
+        }
+    }
+}
+
+}  // namespace
+
 std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* metadata) {
     if (!std::filesystem::exists(path)) throw_error("cannot open '{}': no such file", path);
+    check_exr_header(path);
     try {
+        // OpenEXR itself refuses larger data windows while reading the header, before it
+        // allocates its line-offset table.
+        static const bool limited = [] {
+            Imf::Header::setMaxImageSize(kMaxImageSide, kMaxImageSide);
+            Imf::Header::setMaxTileSize(kMaxImageSide, kMaxImageSide);
+            return true;
+        }();
+        (void)limited;
         Imf::InputFile file(path.c_str());
         const Imath::Box2i window = file.header().dataWindow();
         if (metadata)
             for (auto it = file.header().begin(); it != file.header().end(); ++it)
                 if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
                     (*metadata)[it.name()] = text->value();
-        const int width = window.max.x - window.min.x + 1;
-        const int height = window.max.y - window.min.y + 1;
+        const std::int64_t wide_width = std::int64_t(window.max.x) - window.min.x + 1;
+        const std::int64_t wide_height = std::int64_t(window.max.y) - window.min.y + 1;
+        if (wide_width <= 0 || wide_height <= 0) throw_error("cannot read EXR '{}': empty data window", path);
+        std::size_t channel_count = 0;
+        for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {
+            if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
+                throw_error(
+                    "cannot read EXR '{}': subsampled channel '{}' is not supported", path, it.name());
+            ++channel_count;
+        }
+        if (channel_count == 0) throw_error("cannot read EXR '{}': the file has no channels", path);
+        check_image_size(path,
+                         file_size_or_zero(path),
+                         "EXR",
+                         std::uint64_t(wide_width),
+                         std::uint64_t(wide_height),
+                         2.0 * double(wide_width) * double(wide_height) * double(channel_count));
+        const int width = int(wide_width), height = int(wide_height);
         std::map<std::string, std::vector<std::string>> layer_channels;  // layer -> channel suffixes
         std::vector<std::string> layer_order;
         for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {

@@ -6,14 +6,13 @@
 // between charts. Vertices with bit-identical transformed positions are therefore welded into
 // one position index (UVs keep their own index buffer), so area-weighted normals stay smooth
 // across seams exactly as for the equivalent OBJ.
-#include <tdf/mesh/mesh_io.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
-
+#include <tdf/mesh/mesh_io.h>
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -65,6 +64,29 @@ double determinant3(const Mat4d& m) {
            m[8] * (m[1] * m[6] - m[5] * m[2]);
 }
 
+const char* component_type_name(int type) {
+    switch (type) {
+        case TINYGLTF_COMPONENT_TYPE_BYTE:
+            return "BYTE";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+            return "UNSIGNED_BYTE";
+        case TINYGLTF_COMPONENT_TYPE_SHORT:
+            return "SHORT";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+            return "UNSIGNED_SHORT";
+        case TINYGLTF_COMPONENT_TYPE_INT:
+            return "INT";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+            return "UNSIGNED_INT";
+        case TINYGLTF_COMPONENT_TYPE_FLOAT:
+            return "FLOAT";
+        case TINYGLTF_COMPONENT_TYPE_DOUBLE:
+            return "DOUBLE";
+        default:
+            return "unknown";
+    }
+}
+
 class GltfReader {
 public:
     GltfReader(const tinygltf::Model& model, const std::string& path) : m_model(model), m_path(path) {}
@@ -76,10 +98,25 @@ public:
         const int have = tinygltf::GetNumComponentsInType(std::uint32_t(a.type));
         if (have < components || have > 4)
             throw_error("{}: {} has {} components per element, expected {}", m_path, what, have, components);
-        std::vector<float> out(a.count * std::size_t(components));
+        // glTF 2.0 (3.7.2.1): POSITION is FLOAT; TEXCOORD_n and COLOR_n are FLOAT or normalized
+        // UNSIGNED_BYTE / UNSIGNED_SHORT. Anything else is a broken or quantized file we would
+        // otherwise read as wrong numbers.
+        const bool is_float = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT;
+        const bool normalized_integer =
+            a.normalized && (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                             a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+        if (!is_float && (std::strcmp(what, "POSITION") == 0 || !normalized_integer))
+            throw_error(
+                "{}: {} has component type {}{}, expected FLOAT{}",
+                m_path,
+                what,
+                component_type_name(a.componentType),
+                a.normalized ? " (normalized)" : "",
+                std::strcmp(what, "POSITION") == 0 ? "" : " or normalized UNSIGNED_BYTE/UNSIGNED_SHORT");
         const unsigned char* base = nullptr;
         std::size_t stride = 0;
-        data(a, what, base, stride);
+        data(a, what, base, stride);  // bounds-checks the count against the buffer before allocating
+        std::vector<float> out(a.count * std::size_t(components));
         for (std::size_t i = 0; i < a.count; ++i)
             for (int c = 0; c < components; ++c) {
                 const unsigned char* p = base + i * stride + std::size_t(c) * component_size(a);
@@ -153,7 +190,17 @@ private:
                             tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType));
         if (element <= 0) throw_error("{}: {} has an invalid type", m_path, what);
         stride = view.byteStride ? view.byteStride : std::size_t(element);
+        // In 64-bit arithmetic that cannot wrap: every term is bounded by the buffer size first.
+        const std::size_t size = buffer.size();
+        if (view.byteOffset > size || a.byteOffset > size || view.byteLength > size || stride > size)
+            throw_error("{}: {} reads past the end of its buffer (truncated file?)", m_path, what);
         const std::size_t start = view.byteOffset + a.byteOffset;
+        if (a.count > 0 && (a.count - 1 > size / std::max<std::size_t>(stride, 1) ||
+                            start + (a.count - 1) * stride + std::size_t(element) > size))
+            throw_error("{}: {} has {} elements, more than its buffer holds (truncated file?)",
+                        m_path,
+                        what,
+                        a.count);
         const std::size_t end = a.count == 0 ? start : start + (a.count - 1) * stride + std::size_t(element);
         if (end > buffer.size() || end > view.byteOffset + view.byteLength)
             throw_error("{}: {} reads past the end of its buffer (truncated file?)", m_path, what);
@@ -166,11 +213,30 @@ private:
 
 // Keeps the encoded bytes instead of decoding every image (normal and roughness maps are
 // 2048^2 in typical files); only the base colour texture is decoded, after parsing.
+// tinygltf 2.7 passes a bufferView image's bytes without checking the view against its buffer
+// (found by fuzzing: a heap overflow on a .glb whose view runs past the BIN chunk), so those
+// bytes are not touched here; embedded_image_bytes() copies them with bounds checks instead.
 bool keep_encoded_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
                         const unsigned char* bytes, int size, void*) {
-    image->image.assign(bytes, bytes + size);
+    if (image->bufferView < 0 && size > 0) image->image.assign(bytes, bytes + size);
     image->width = image->height = -1;
     return true;
+}
+
+// The bytes of an image stored in a buffer view, bounds-checked.
+void embedded_image_bytes(const tinygltf::Model& model, int view_index, const std::string& path,
+                          const unsigned char*& base, std::size_t& length) {
+    if (view_index < 0 || std::size_t(view_index) >= model.bufferViews.size())
+        throw_error("{}: image buffer view {} does not exist", path, view_index);
+    const tinygltf::BufferView& view = model.bufferViews[std::size_t(view_index)];
+    if (view.buffer < 0 || std::size_t(view.buffer) >= model.buffers.size())
+        throw_error("{}: image buffer view {} has no valid buffer", path, view_index);
+    const std::vector<unsigned char>& buffer = model.buffers[std::size_t(view.buffer)].data;
+    if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
+        throw_error(
+            "{}: image buffer view {} reads past the end of its buffer (truncated file?)", path, view_index);
+    base = buffer.data() + view.byteOffset;
+    length = view.byteLength;
 }
 
 Image decode_base_colour(tinygltf::Image& gltf_image, int index, const std::string& path) {
@@ -179,24 +245,17 @@ Image decode_base_colour(tinygltf::Image& gltf_image, int index, const std::stri
         const std::string file = (fs::path(path).parent_path() / gltf_image.uri).string();
         return read_image(file);
     }
-    std::string err, warn;
-    const std::vector<unsigned char> encoded = std::move(gltf_image.image);
-    if (!tinygltf::LoadImageData(&gltf_image, index, &err, &warn, 0, 0, encoded.data(), int(encoded.size()), nullptr))
-        throw_error("{}: cannot decode embedded image {}: {}", path, index, err);
-    const int w = gltf_image.width, h = gltf_image.height, c = gltf_image.component;
-    if (gltf_image.bits != 8 && gltf_image.bits != 16)
-        throw_error("{}: embedded image {} has {} bits per channel", path, index, gltf_image.bits);
-    Image out(w, h, c);
-    const float scale = gltf_image.bits == 8 ? 1.f / 255.f : 1.f / 65535.f;
-    for (std::size_t i = 0; i < out.values().size(); ++i) {
-        if (gltf_image.bits == 8) {
-            out.values()[i] = float(gltf_image.image[i]) * scale;
-        } else {
-            std::uint16_t u;
-            std::memcpy(&u, &gltf_image.image[2 * i], 2);
-            out.values()[i] = float(u) * scale;
+    // Decoded by tdf's own PNG/JPEG reader (size limits checked before allocating), expanded
+    // to RGBA as tinygltf's stb decoder did: grey -> (g, g, g), missing alpha -> 1.
+    const std::string encoded(gltf_image.image.begin(), gltf_image.image.end());
+    const Image decoded = decode_image(encoded, fmt::format("{}#image{}", path, index));
+    const int c = decoded.channels();
+    Image out(decoded.width(), decoded.height(), 4, 1.f);
+    for (int y = 0; y < out.height(); ++y)
+        for (int x = 0; x < out.width(); ++x) {
+            for (int k = 0; k < 3; ++k) out.at(x, y, k) = decoded.at(x, y, c >= 3 ? k : 0);
+            if (c == 2 || c == 4) out.at(x, y, 3) = decoded.at(x, y, c - 1);
         }
-    }
     return out;
 }
 
@@ -367,6 +426,12 @@ TriangleMesh load_gltf(const std::string& path, const MeshLoadOptions& options) 
         if (source < 0 || std::size_t(source) >= model.images.size())
             throw_error("{}: texture {} has no valid image", path, b.base_colour_texture);
         tinygltf::Image& image = model.images[std::size_t(source)];
+        if (image.bufferView >= 0) {
+            const unsigned char* base = nullptr;
+            std::size_t length = 0;
+            embedded_image_bytes(model, image.bufferView, path, base, length);
+            image.image.assign(base, base + length);
+        }
         mesh.albedo = decode_base_colour(image, source, path);
         mesh.albedo_path = image.uri.empty() || image.uri.rfind("data:", 0) == 0
                                ? fmt::format("{}#image{}", path, source)

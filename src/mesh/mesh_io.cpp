@@ -18,6 +18,11 @@ TriangleMesh load_mesh(const std::string& path, const MeshLoadOptions& options) 
 }
 
 void finish_loaded_mesh(TriangleMesh& mesh, const std::string& source, const MeshLoadOptions& options) {
+    // A NaN texel would be baked, rendered and exported as 0 without a word.
+    if (!mesh.albedo.empty() && !mesh.albedo.all_finite())
+        throw_error("{}: the albedo texture '{}' contains NaN or infinite values",
+                    source,
+                    mesh.albedo_path.empty() ? std::string("(embedded)") : mesh.albedo_path);
     const std::size_t degenerate = validate_mesh(mesh, source);
     if (degenerate > 0)
         log_warning("{}: {} of {} faces have zero area (kept; they are never hit)", source, degenerate,

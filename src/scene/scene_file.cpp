@@ -117,6 +117,13 @@ void parse_views(ConfigReader views, ViewsSpec& spec) {
     spec.patch_reference_flip = patches.get<bool>("reference_flip", false);
     patches.check_all_read();
     views.check_all_read();
+    const long long total =
+        (long long)spec.orbit.size() + spec.turntable_count + spec.random_count + spec.patch_count;
+    if (total > kMaxSceneViews)
+        throw_error("{}: {} views in all (orbit + turntable + random + patches) is over the limit of {}",
+                    views.where(),
+                    total,
+                    kMaxSceneViews);
     if (spec.orbit.empty() && spec.turntable_count == 0 && spec.random_count == 0 && spec.patch_count == 0)
         spec.orbit.push_back({0.f, 0.f, spec.radius, spec.fovy});
 }
@@ -298,10 +305,20 @@ SceneDescription parse_scene(const Json& json, const std::string& path) {
     s.color_space = one_of(root, "color_space", s.color_space, {"raw", "srgb"});
     s.passes = string_list(root, "passes", s.passes);
     if (s.passes.empty()) throw_error("{}: 'passes' is empty", path);
-    const std::int64_t seed = root.get<std::int64_t>("seed", 0);
-    if (seed < 0) throw_error("{}: 'seed' must not be negative, got {}", path, seed);
-    s.seed = std::uint64_t(seed);
+    s.seed = root.get<std::uint64_t>("seed", 0);
     parse_views(root.child("views"), s.views);
+    // Supersampled views render at `ssaa` times the size (random views at up to 2x).
+    const float largest_ssaa = std::max(s.ssaa, s.views.random_count > 0 && s.views.random_ssaa ? 2.f : 1.f);
+    if (float(std::max(s.width, s.height)) * largest_ssaa > float(kMaxRenderSide))
+        throw_error(
+            "{}: image {}x{} at ssaa {} renders {:.0f} pixels wide, over the limit of {} (lower 'ssaa' or "
+            "'image.width'/'image.height')",
+            path,
+            s.width,
+            s.height,
+            largest_ssaa,
+            float(std::max(s.width, s.height)) * largest_ssaa,
+            kMaxRenderSide);
     parse_light(root.child("light"), s.shading, s.light);
     if (root.has("parts")) {
         if (!root.raw("parts").is_object())

@@ -1,8 +1,7 @@
-#include <tdf/tactile/height_input.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
+#include <tdf/tactile/height_input.h>
 #include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/npy_reader.h>
 #include <tdf/tactile/poisson.h>
@@ -11,6 +10,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 namespace tdf {
 
@@ -28,6 +28,13 @@ Image array_image(const NpyArray& array, const std::string& where) {
         if (!std::isfinite(array.values[i]))
             throw_error("{}: NaN or infinite value at row {}, column {}",
                         where,
+                        i / array.shape[1],
+                        i % array.shape[1]);
+        // A float64 such as 1e300 would become +Inf as a 32-bit height (and NaN normals later).
+        if (std::fabs(array.values[i]) > double(std::numeric_limits<float>::max()))
+            throw_error("{}: value {} at row {}, column {} does not fit a 32-bit float",
+                        where,
+                        array.values[i],
                         i / array.shape[1],
                         i % array.shape[1]);
         image.data()[i] = float(array.values[i]);
@@ -121,6 +128,14 @@ HeightInput load_image(const std::string& path, const HeightInputOptions& option
 }  // namespace
 
 HeightInput load_height_input(const std::string& path, const HeightInputOptions& options) {
+    if (!std::isfinite(options.mm_per_pixel) || options.mm_per_pixel < 0)
+        throw_error("{}: the pixel size (--mm-per-pixel) must be a finite number >= 0, got {}",
+                    path,
+                    options.mm_per_pixel);
+    if (!std::isfinite(options.image_height_mm) || !(options.image_height_mm > 0))
+        throw_error("{}: the full-scale height (--height-mm) must be a finite positive number, got {}",
+                    path,
+                    options.image_height_mm);
     const std::string ext = lower_extension(path);
     HeightInput input;
     if (ext == ".npz") {

@@ -168,7 +168,18 @@ std::uint64_t u64(const std::string& s, std::size_t at) {
     return std::uint64_t(u32(s, at)) | (std::uint64_t(u32(s, at + 4)) << 32);
 }
 
+// True when `length` bytes at `offset` lie inside `bytes`; offsets and lengths come from the
+// file (ZIP64: 64-bit), so `offset + length` must not be computed before both are bounded.
+bool fits(const std::string& bytes, std::uint64_t offset, std::uint64_t length) {
+    return offset <= bytes.size() && length <= bytes.size() - offset;
+}
+
 std::string inflate_raw(const std::string& compressed, std::uint64_t size, const std::string& where) {
+    // DEFLATE expands at most 1032:1; a larger claimed size is a corrupt header, refused before
+    // allocating it.
+    if (size > 1032 * std::uint64_t(compressed.size()) + 1024)
+        throw_error(
+            "{}: uncompressed size {} is impossible for {} compressed bytes", where, size, compressed.size());
     std::string out(size, '\0');
     z_stream stream{};
     if (inflateInit2(&stream, -MAX_WBITS) != Z_OK) throw_error("{}: cannot initialise zlib", where);
@@ -217,8 +228,16 @@ NpyArray parse_npy(const std::string& bytes, const std::string& where) {
     const char kind = d[1];
     const int size = std::atoi(d.c_str() + 2);
     const bool swap = d[0] == '>';
+    // Checked product: shape entries are bounded, their product may not be.
     std::size_t count = 1;
-    for (std::size_t n : array.shape) count *= n;
+    for (std::size_t n : array.shape) {
+        if (n != 0 && count > (bytes.size() + 1) / n)
+            throw_error("{}: shape {} needs more data than the {} bytes present",
+                        where,
+                        header_value(header, "shape", where),
+                        bytes.size());
+        count *= n;
+    }
     const std::size_t data_start = header_start + header_length;
     if (size <= 0 || size > 8) throw_error("{}: unsupported dtype '{}'", where, d);
     if ((bytes.size() - data_start) / std::size_t(size) < count)
@@ -259,7 +278,7 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
     if (directory == 0xffffffffu || entries == 0xffffu) {  // ZIP64 end of central directory
         if (eocd < 20 || u32(zip, eocd - 20) != 0x07064b50u) throw_error("{}: corrupt ZIP64 archive", path);
         const std::uint64_t record = u64(zip, eocd - 20 + 8);
-        if (record + 56 > zip.size() || u32(zip, std::size_t(record)) != 0x06064b50u)
+        if (!fits(zip, record, 56) || u32(zip, std::size_t(record)) != 0x06064b50u)
             throw_error("{}: corrupt ZIP64 archive", path);
         entries = u64(zip, std::size_t(record) + 32);
         directory = u64(zip, std::size_t(record) + 48);
@@ -268,34 +287,44 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
     std::map<std::string, NpyArray> arrays;
     std::size_t at = std::size_t(directory);
     for (std::uint64_t e = 0; e < entries; ++e) {
-        if (at + 46 > zip.size() || u32(zip, at) != 0x02014b50u)
-            throw_error("{}: corrupt zip directory", path);
+        if (!fits(zip, at, 46) || u32(zip, at) != 0x02014b50u) throw_error("{}: corrupt zip directory", path);
         const std::uint16_t method = u16(zip, at + 10);
+        const std::uint32_t crc = u32(zip, at + 16);
         std::uint64_t compressed = u32(zip, at + 20), uncompressed = u32(zip, at + 24);
         const std::size_t name_length = u16(zip, at + 28), extra_length = u16(zip, at + 30),
                           comment_length = u16(zip, at + 32);
         std::uint64_t local = u32(zip, at + 42);
-        if (at + 46 + name_length + extra_length > zip.size()) throw_error("{}: corrupt zip directory", path);
+        if (!fits(zip, at, 46 + std::uint64_t(name_length) + extra_length))
+            throw_error("{}: corrupt zip directory", path);
         const std::string name = zip.substr(at + 46, name_length);
         // ZIP64 extra field: the 64-bit values follow in this order, only for saturated fields.
         for (std::size_t x = at + 46 + name_length; x + 4 <= at + 46 + name_length + extra_length;) {
             const std::uint16_t id = u16(zip, x), length = u16(zip, x + 2);
             std::size_t field = x + 4;
+            // Each 64-bit value must lie inside this extra record (and so inside the file).
+            const std::size_t record_end =
+                std::min(x + 4 + std::size_t(length), at + 46 + name_length + extra_length);
+            const auto take = [&](std::uint64_t& value) {
+                if (value != 0xffffffffu) return;
+                if (field + 8 > record_end) throw_error("{}: corrupt ZIP64 extra field", path);
+                value = u64(zip, field);
+                field += 8;
+            };
             if (id == 0x0001) {
-                if (uncompressed == 0xffffffffu) uncompressed = u64(zip, field), field += 8;
-                if (compressed == 0xffffffffu) compressed = u64(zip, field), field += 8;
-                if (local == 0xffffffffu) local = u64(zip, field);
+                take(uncompressed);
+                take(compressed);
+                take(local);
             }
             x += 4 + std::size_t(length);
         }
         at += 46 + name_length + extra_length + comment_length;
 
         const std::string where = path + ": " + name;
-        if (local + 30 > zip.size() || u32(zip, std::size_t(local)) != 0x04034b50u)
+        if (!fits(zip, local, 30) || u32(zip, std::size_t(local)) != 0x04034b50u)
             throw_error("{}: corrupt zip entry (truncated archive?)", where);
         const std::uint64_t data =
             local + 30 + u16(zip, std::size_t(local) + 26) + u16(zip, std::size_t(local) + 28);
-        if (data + compressed > zip.size()) throw_error("{}: member data is truncated", where);
+        if (!fits(zip, data, compressed)) throw_error("{}: member data is truncated", where);
         std::string member = zip.substr(std::size_t(data), std::size_t(compressed));
         if (method == 8) {
             member = inflate_raw(member, uncompressed, where);
@@ -304,6 +333,13 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
         } else if (compressed != uncompressed) {
             throw_error("{}: corrupt zip entry sizes", where);
         }
+        const std::uint32_t actual =
+            std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(member.data()), uInt(member.size())));
+        if (actual != crc)
+            throw_error("{}: CRC mismatch (stored {:08x}, computed {:08x}): the archive is corrupt",
+                        where,
+                        crc,
+                        actual);
         std::string key = name;
         if (key.size() > 4 && key.compare(key.size() - 4, 4, ".npy") == 0) key.resize(key.size() - 4);
         arrays[key] = parse_npy(member, where);

@@ -174,6 +174,8 @@ bool slopes_known(const HeightMap& map, Amplitude amplitude) {
 }
 
 Image normal_map_from_height(const HeightMap& map, Amplitude amplitude, float strength) {
+    if (!std::isfinite(strength) || !(strength > 0.f))  // NaN made an all-black map
+        throw_error("{}: the normal strength must be a finite positive number, got {}", map.source, strength);
     if (amplitude == Amplitude::Auto)
         amplitude = map.reference_scale_mm > 0 ? Amplitude::Reference : Amplitude::Physical;
     float gain = 0;

@@ -202,3 +202,55 @@ TEST(GltfIo, RecordsNodeMeshPrimitiveAndMaterialPerFace) {
         EXPECT_DOUBLE_EQ(group.world_from_node[15], 1.0);
     }
 }
+
+namespace {
+// The quad with one accessor edited.
+std::string write_edited_gltf(const std::string& name, int accessor, const nlohmann::json& changes) {
+    const QuadBuffer buffer = quad_buffer();
+    const std::string dir = test::scratch_dir();
+    std::ofstream(dir + "/" + name + ".bin", std::ios::binary)
+        .write(reinterpret_cast<const char*>(buffer.bytes.data()), std::streamsize(buffer.bytes.size()));
+    nlohmann::json j = quad_json(name + ".bin", buffer.bytes.size());
+    j["accessors"][std::size_t(accessor)].update(changes);
+    const std::string path = dir + "/" + name + ".gltf";
+    std::ofstream(path) << j.dump();
+    return path;
+}
+std::string gltf_error(const std::string& path) {
+    try {
+        load_mesh(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+}  // namespace
+
+TEST(GltfIo, PositionMustBeFloat) {
+    // glTF 2.0: POSITION is FLOAT; UNSIGNED_BYTE positions were read as small integers.
+    const std::string ubyte = write_edited_gltf("pos_ubyte", 0, {{"componentType", 5121}});
+    const std::string message = gltf_error(ubyte);
+    EXPECT_NE(message.find("pos_ubyte.gltf"), std::string::npos) << message;
+    EXPECT_NE(message.find("POSITION has component type UNSIGNED_BYTE, expected FLOAT"), std::string::npos)
+        << message;
+    const std::string normalized =
+        gltf_error(write_edited_gltf("pos_ushort", 0, {{"componentType", 5123}, {"normalized", true}}));
+    EXPECT_NE(normalized.find("POSITION has component type UNSIGNED_SHORT (normalized)"), std::string::npos)
+        << normalized;
+    // TEXCOORD_0 as non-normalized bytes is invalid too; normalized bytes are allowed.
+    EXPECT_NE(gltf_error(write_edited_gltf("uv_ubyte", 1, {{"componentType", 5121}})).find("TEXCOORD_0"),
+              std::string::npos);
+}
+
+TEST(GltfIo, HugeAccessorCountIsRefusedBeforeAllocating) {
+    for (const std::int64_t count : {std::int64_t(2147483647), std::int64_t(1) << 40}) {
+        const std::string path = write_edited_gltf("count_" + std::to_string(count), 0, {{"count", count}});
+        const std::string message = gltf_error(path);
+        EXPECT_NE(message.find(std::filesystem::path(path).filename().string()), std::string::npos)
+            << message;
+        EXPECT_NE(message.find("POSITION"), std::string::npos) << message;
+    }
+    // A byte stride beyond the buffer cannot wrap around either.
+    const std::string stride = gltf_error(write_edited_gltf("offset", 0, {{"byteOffset", 4294967295ll}}));
+    EXPECT_NE(stride.find("offset.gltf"), std::string::npos) << stride;
+}

@@ -1,12 +1,13 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
+#include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_io.h>
 
-#include "common/test_paths.h"
-
-#include <gtest/gtest.h>
-
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+
+#include "common/test_paths.h"
 
 using namespace tdf;
 
@@ -113,4 +114,28 @@ TEST(ObjIo, ValidateRejectsInconsistentFaceGroups) {
     EXPECT_THROW(validate_mesh(mesh, "m"), Error);
     mesh.face_group = {0, 0};
     EXPECT_THROW(validate_mesh(mesh, "m"), Error);
+
+TEST(ObjIo, NanTextureIsAnErrorNamingTheTexture) {
+    // `atlas --bake-albedo` used to bake such texels as 0 without a word.
+    Image texture(4, 4, 3, 0.5f);
+    texture.at(1, 2, 0) = std::nanf("");
+    const std::string exr = test::scratch_dir() + "/nan_texture.exr";
+    write_exr(exr, texture);
+    write_file("nan_texture.mtl", "newmtl m\nmap_Kd nan_texture.exr\n");
+    const std::string path =
+        write_file("nan_texture.obj",
+                   "mtllib nan_texture.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                   "f 1/1 2/2 3/3\n");
+    try {
+        load_mesh(path);
+        FAIL() << "a NaN texture was accepted";
+    } catch (const Error& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("nan_texture.obj"), std::string::npos) << message;
+        EXPECT_NE(message.find("nan_texture.exr"), std::string::npos) << message;
+        EXPECT_NE(message.find("NaN"), std::string::npos) << message;
+    }
+    MeshLoadOptions no_textures;
+    no_textures.load_textures = false;
+    EXPECT_NO_THROW(load_mesh(path, no_textures));
 }

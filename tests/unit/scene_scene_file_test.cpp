@@ -105,3 +105,39 @@ TEST(SceneFile, BadInputNamesTheFileAndKey) {
     for (const auto& message : {error_of(ok, {"image.width=0"}), error_of(ok, {"shading=fancy"})})
         EXPECT_NE(message.find("ok.json"), std::string::npos) << message;
 }
+
+TEST(SceneFile, LimitsAreCheckedBeforeAnyWork) {
+    const std::string ok = write_scene("limits.json", R"({"mesh": "a.obj"})");
+    const std::string views = error_of(ok, {"views.random.count=100000000"});
+    EXPECT_NE(views.find("limits.json.views: 100000000 views in all"), std::string::npos) << views;
+    EXPECT_NE(views.find("limit of 10000"), std::string::npos) << views;
+    EXPECT_NE(error_of(ok, {"views.turntable.count=9000", "views.patches.count=2000"}).find("11000 views"),
+              std::string::npos);
+    EXPECT_NO_THROW(load_scene(ok, {"views.turntable.count=10000"}));
+    const std::string ssaa = error_of(ok, {"ssaa=4", "image.width=16384", "image.height=16384"});
+    EXPECT_NE(ssaa.find("at ssaa 4 renders 65536 pixels wide, over the limit of 16384"), std::string::npos)
+        << ssaa;
+    EXPECT_NO_THROW(load_scene(ok, {"ssaa=4", "image.width=4096", "image.height=4096"}));
+    // Random views' SSAA factor reaches 2.
+    EXPECT_NE(
+        error_of(ok, {"image.width=16384", "views.random.count=1", "views.random.ssaa=true"}).find("ssaa 2"),
+        std::string::npos);
+    // An int key given a value that does not fit an int is an error, not a wrapped number.
+    EXPECT_NE(error_of(ok, {"image.width=4294967808"}).find("'width' must be an integer in"),
+              std::string::npos);
+}
+
+TEST(SceneFile, SeedTakesTheFullUnsignedRange) {
+    const std::string ok = write_scene("seed.json", R"({"mesh": "a.obj"})");
+    EXPECT_EQ(load_scene(ok, {"seed=18446744073709551615"}).seed, 18446744073709551615ull);
+    EXPECT_EQ(load_scene(ok, {"seed=18446744073709551615"}).to_json()["seed"].get<std::uint64_t>(),
+              18446744073709551615ull);
+    const std::string negative = error_of(ok, {"seed=-1"});
+    EXPECT_NE(negative.find("'seed' must be an integer in [0, 18446744073709551615], got -1"),
+              std::string::npos)
+        << negative;
+    EXPECT_NE(error_of(ok, {"seed=18446744073709551616"}).find("seed"), std::string::npos);
+    EXPECT_NE(error_of(write_scene("dupseed.json", R"({"mesh": "a.obj", "seed": 1, "seed": 2})"))
+                  .find("dupseed.json: duplicate key 'seed'"),
+              std::string::npos);
+}

@@ -188,3 +188,51 @@ TEST(NpyReader, ReadsTheStrawberryCapture) {
     EXPECT_EQ(arrays.at("image").dtype, "|u1");
     EXPECT_EQ(arrays.at("image").shape, (std::vector<std::size_t>{240, 320, 3}));
 }
+
+TEST(NpyReader, ValueBeyondFloatRangeIsAnErrorNamingTheFile) {
+    // 1e300 is a finite float64 but +Inf as a 32-bit height (then NaN normals): refused.
+    std::vector<double> values(16, 0.5);
+    values[6] = 1e300;
+    const std::string path = write_file("huge_value.npy", npy_bytes("<f8", "(4, 4)", raw(values)));
+    const std::string message = error_of([&] { load_height_input(path); });
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find("row 1, column 2"), std::string::npos) << message;
+    EXPECT_NE(message.find("32-bit float"), std::string::npos) << message;
+    values[6] = 3e38;  // still a float
+    EXPECT_NO_THROW(
+        load_height_input(write_file("large_value.npy", npy_bytes("<f8", "(4, 4)", raw(values)))));
+}
+
+TEST(NpyReader, NpzMemberWithBadCrcIsRefused) {
+    const std::string dm = npy_bytes("<f8", "(4, 4)", raw<double>(std::vector<double>(16, 1.0)));
+    for (const bool compress : {false, true}) {
+        std::string zip = zip_bytes({{"dm.npy", dm}}, compress);
+        EXPECT_NO_THROW(read_npz(write_file("crc_ok.npz", zip)));
+        // Flip one data byte of the member (inside the stored/deflated payload): the CRC no
+        // longer matches (for a deflated member the stream may also fail to inflate).
+        const std::size_t payload = 30 + 6 + (compress ? 20 : 100);
+        zip[payload] = char(zip[payload] ^ 0x01);
+        const std::string path = write_file(compress ? "crc_bad_deflated.npz" : "crc_bad.npz", zip);
+        const std::string message = error_of([&] { read_npz(path); });
+        EXPECT_NE(message.find(path + ": dm.npy"), std::string::npos) << message;
+        if (!compress) {
+            EXPECT_NE(message.find("CRC mismatch"), std::string::npos) << message;
+        }
+    }
+}
+
+TEST(NpyReader, HugeClaimedSizesAreRefusedBeforeAllocating) {
+    // Shape entries within bounds whose product overflows 64 bits.
+    const std::string overflow =
+        npy_bytes("<f8", "(1099511627776, 1099511627776, 1099511627776)", std::string(64, '\0'));
+    EXPECT_NE(error_of([&] { parse_npy(overflow, "overflow.npy"); }).find("overflow.npy"), std::string::npos);
+    // A deflated member claiming 4 GB uncompressed from a few bytes.
+    std::string zip = zip_bytes({{"dm.npy", std::string(64, 'a')}}, true);
+    const std::size_t directory = zip.rfind(std::string("PK\x01\x02", 4));
+    ASSERT_NE(directory, std::string::npos);
+    for (int k = 0; k < 4; ++k) zip[directory + 24 + std::size_t(k)] = char(0xfe);
+    const std::string path = write_file("bomb.npz", zip);
+    const std::string message = error_of([&] { read_npz(path); });
+    EXPECT_NE(message.find("impossible"), std::string::npos) << message;
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+}

@@ -262,3 +262,21 @@ TEST(Resample, LanczosKeepsConstantsAndIsCentred) {
     for (int x = 8; x < 24; ++x) EXPECT_NEAR(up.at(x, 0, 0), (x + 0.5f) * 0.5f - 0.5f, 0.015f);
     EXPECT_NEAR(up.at(15, 0, 0) + up.at(16, 0, 0), 15.0f, 1e-4f);  // symmetric about the centre
 }
+
+TEST(TactilePipeline, NonFiniteStrengthIsAnErrorNotABlackMap) {
+    HeightMap map;
+    map.height = Image(8, 8, 1, 0.f);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) map.height.at(x, y, 0) = 0.01f * float(x * y);
+    map.mm_per_pixel = 0.1f;
+    map.source = "ramp.exr";
+    EXPECT_TRUE(normal_map_from_height(map, Amplitude::Physical, 1.f).all_finite());
+    for (const float strength : {std::nanf(""), INFINITY, 0.f, -1.f}) {
+        try {
+            normal_map_from_height(map, Amplitude::Physical, strength);
+            ADD_FAILURE() << "strength " << strength << " accepted";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("ramp.exr"), std::string::npos) << e.what();
+        }
+    }
+}

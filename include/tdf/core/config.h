@@ -5,9 +5,10 @@
 /// Overrides use dotted paths into the JSON: `image.width=256`, `views.mode=turntable`,
 /// `seed=7`. The value is parsed as JSON when it can be (numbers, true/false, arrays,
 /// quoted strings) and taken as a plain string otherwise (`mesh=meshes/cow.obj`).
-#include <nlohmann/json.hpp>
-
+#include <cstdint>
+#include <limits>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <vector>
@@ -16,7 +17,8 @@ namespace tdf {
 
 using Json = nlohmann::json;
 
-/// Parses `text` (the contents of `source`, used in error messages).
+/// Parses `text` (the contents of `source`, used in error messages). Duplicate keys in one
+/// object and numbers out of double range (`1e999`) are errors naming `source`.
 Json parse_json(const std::string& text, const std::string& source);
 /// Reads and parses a JSON file. A top-level "parent" key names a file (relative to this one)
 /// whose keys this file extends; objects merge recursively, other values replace.
@@ -48,6 +50,8 @@ public:
 
 private:
     [[noreturn]] void type_error(const std::string& key, const char* expected) const;
+    [[noreturn]] void range_error(const std::string& key, const std::string& low,
+                                  const std::string& high) const;
 
     const Json* m_object;
     std::string m_where;
@@ -72,6 +76,22 @@ T ConfigReader::require(const std::string& key) {
             if (!value.is_boolean()) type_error(key, "true or false");
         } else if constexpr (std::is_integral_v<T>) {
             if (!value.is_number_integer()) type_error(key, "an integer");
+            // nlohmann converts out-of-range integers silently (2^64 - 1 read as int64 is -1).
+            bool fits;
+            if (value.is_number_unsigned()) {
+                fits = value.template get<std::uint64_t>() <= std::uint64_t(std::numeric_limits<T>::max());
+            } else {
+                const std::int64_t v = value.template get<std::int64_t>();
+                if constexpr (std::is_signed_v<T>)
+                    fits = v >= std::int64_t(std::numeric_limits<T>::min()) &&
+                           v <= std::int64_t(std::numeric_limits<T>::max());
+                else
+                    fits = v >= 0 && std::uint64_t(v) <= std::uint64_t(std::numeric_limits<T>::max());
+            }
+            if (!fits)
+                range_error(key,
+                            std::to_string(std::numeric_limits<T>::min()),
+                            std::to_string(std::numeric_limits<T>::max()));
         } else if constexpr (std::is_floating_point_v<T>) {
             if (!value.is_number()) type_error(key, "a number");
         } else if constexpr (std::is_same_v<T, std::string>) {

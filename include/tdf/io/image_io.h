@@ -16,10 +16,21 @@
 
 namespace tdf {
 
+/// Largest image the readers accept: each side at most kMaxImageSide pixels and at most
+/// kMaxImagePixels in all (16384 x 16384). A header claiming more, or claiming far more pixels
+/// than the file's size can encode (more than 4096 decoded bytes per file byte), is an error
+/// naming the file, raised before any pixel memory is allocated.
+inline constexpr int kMaxImageSide = 65536;
+inline constexpr long long kMaxImagePixels = 16384LL * 16384LL;
+
 /// Reads a PNG, JPEG or EXR file (chosen by content, not extension). For EXR files the
 /// channels are returned in the file's order (see read_exr_layers for names).
 /// Throws tdf::Error naming the file for missing, truncated or unsupported files.
 Image read_image(const std::string& path);
+
+/// Decodes a PNG or JPEG held in memory (e.g. embedded in a .glb), with the same value
+/// conventions and size limits as read_image; `where` names it in errors.
+Image decode_image(const std::string& bytes, const std::string& where);
 
 enum class Quantize { Truncate, Round };
 
@@ -31,12 +42,27 @@ using ImageMetadata = std::map<std::string, std::string>;
 /// string attributes; JPEG has none). Other attributes are not returned.
 Image read_image(const std::string& path, ImageMetadata& metadata);
 
-/// Writes 1-4 channels as an 8- or 16-bit PNG.
+/// Writes 1-4 channels as an 8- or 16-bit PNG. Every writer refuses a name whose extension
+/// says another format (`-o map.jpg` never receives PNG bytes).
 void write_png(const std::string& path, const Image& image, int bits = 8,
                Quantize quantize = Quantize::Truncate);
 /// write_png with text metadata, stored as uncompressed tEXt chunks before the pixels.
 void write_png(const std::string& path, const Image& image, const ImageMetadata& metadata, int bits = 8,
                Quantize quantize = Quantize::Truncate);
+
+/// Writes 1 (grey) or 3 (RGB) channels as a baseline JPEG of the given quality (1-100);
+/// 4 channels drop the alpha. Values are clamped to [0, 1] and rounded.
+void write_jpeg(const std::string& path, const Image& image, int quality = 95);
+
+/// Writes `image` in the format its name says: .png (8-bit, or `png_bits`), .jpg/.jpeg, .exr
+/// (float). Any other extension is an error naming the file.
+void write_image(const std::string& path, const Image& image, int png_bits = 8,
+                 Quantize quantize = Quantize::Truncate);
+
+/// Throws tdf::Error unless `path` ends in one of `extensions` (lower-case, with the dot), e.g.
+/// check_output_extension(path, {".png", ".exr"}, "--diff").
+void check_output_extension(const std::string& path, const std::vector<std::string>& extensions,
+                            const std::string& what);
 
 /// One named group of channels in a multi-layer EXR: layer "albedo" with channel names
 /// {"R","G","B"} is stored as channels "albedo.R", "albedo.G", "albedo.B". An empty layer

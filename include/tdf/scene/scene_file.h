@@ -21,6 +21,11 @@
 
 namespace tdf {
 
+/// Limits checked when a scene is parsed, so that a typo cannot ask for terabytes:
+/// views of all kinds together, and the side of a supersampled render (image side x ssaa).
+inline constexpr int kMaxSceneViews = 10000;
+inline constexpr int kMaxRenderSide = 16384;
+
 /// One fixed orbit camera (spec 2.1); radius and fovy default to views.radius / views.fovy.
 struct OrbitViewSpec {
     float elevation = 0;

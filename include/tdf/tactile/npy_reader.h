@@ -4,7 +4,8 @@
 /// Supported: format versions 1.0-3.0, C or Fortran order, little-endian or single-byte dtypes
 /// `f2 f4 f8 i1 i2 i4 i8 u1 u2 u4 u8 b1` (big-endian `>` dtypes are byte-swapped). Zip members
 /// may be STORED (what `np.savez` writes) or DEFLATE-compressed (`np.savez_compressed`); ZIP64
-/// sizes are honoured. Values are converted to double on load (every supported dtype fits).
+/// sizes are honoured; every member's CRC-32 is checked. Values are converted to double on load
+/// (every supported dtype fits).
 #include <cstddef>
 #include <map>
 #include <string>
