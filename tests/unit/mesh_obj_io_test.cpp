@@ -114,6 +114,7 @@ TEST(ObjIo, ValidateRejectsInconsistentFaceGroups) {
     EXPECT_THROW(validate_mesh(mesh, "m"), Error);
     mesh.face_group = {0, 0};
     EXPECT_THROW(validate_mesh(mesh, "m"), Error);
+}
 
 TEST(ObjIo, NanTextureIsAnErrorNamingTheTexture) {
     // `atlas --bake-albedo` used to bake such texels as 0 without a word.
