@@ -34,16 +34,24 @@ if not runs:
     runs = [b for b in all_runs if b.get("run_type", "iteration") == "iteration"]
 def split(name):
     base, _, args = name.partition("/")
+    # How the time was taken (real, manual, process CPU) does not make another configuration.
+    args = "/".join(a for a in args.split("/") if a not in ("real_time", "manual_time", "process_time"))
     return base, args
 def rate(b):
     return b.get("rays_per_s") or b.get("items_per_second") or 1.0 / b["real_time"]
 baselines = {split(b["name"])[1]: b for b in runs if split(b["name"])[0].startswith("BM_Baseline")}
-print(f"{'benchmark':<50} {'real ms':>9} {'cpu ms':>9} {'rays/s (M)':>11} {'x baseline':>11} {'cpu x base':>11}")
+print(f"{'benchmark':<60} {'real ms':>9} {'cpu ms':>9} {'rays/s (M)':>11} {'x baseline':>11} {'cpu x base':>11}")
 for b in runs:
     base = baselines.get(split(b["name"])[1])
     ratio = f"{rate(base) / rate(b):11.2f}" if base else f"{'-':>11}"
     cpu_ratio = f"{b['cpu_time'] / base['cpu_time']:11.2f}" if base else f"{'-':>11}"
-    print(f"{b['name']:<50} {b['real_time']:9.2f} {b['cpu_time']:9.2f} {rate(b) / 1e6:11.2f} {ratio} {cpu_ratio}")
-print("(x baseline = slowdown against the BM_Baseline benchmark with the same arguments; 1.00 = as fast)")
+    print(f"{b['name']:<60} {b['real_time']:9.2f} {b['cpu_time']:9.2f} {rate(b) / 1e6:11.2f} {ratio} {cpu_ratio}")
+    # Per-stage seconds (counters s_<stage>), partial CPU times (cpu_ms_<part>) and peak memory,
+    # when a benchmark reports them.
+    extra = [f"{k}={b[k]:.4g}" for k in sorted(b) if k.startswith(("s_", "cpu_ms_")) or k == "peak_RSS_MB"]
+    if extra:
+        print(f"    {' '.join(extra)}")
+print("(x baseline = slowdown against the BM_Baseline benchmark with the same arguments; 1.00 = as fast;"
+      " s_<stage> = seconds per iteration)")
 PY
 done
