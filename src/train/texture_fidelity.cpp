@@ -157,6 +157,8 @@ void SeamJump::add(const GBuffer& g, const Image& image, int map_size) {
     const float texel = 1.0f / float(std::max(map_size, 1));
     const auto pair = [&](std::size_t a, std::size_t b, Vec2f step) {
         if (g.mask[a] <= 0.0f || g.mask[b] <= 0.0f) return;
+        // Occlusion edges (the handle over the body) are not seams: skip pairs at depth jumps.
+        if (std::fabs(g.depth[a] - g.depth[b]) > 0.01f * std::max(g.depth[a], g.depth[b])) return;
         const Vec2f d = g.uv[b] - g.uv[a] - step;
         const float expected = 8.0f * std::sqrt(step.x * step.x + step.y * step.y) + 2.0f * texel;
         double diff = 0;

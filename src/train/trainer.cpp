@@ -975,7 +975,7 @@ QualityReport Trainer::evaluate_held_out() const {
     const TriangleMesh& mesh = *m_target.mesh;
     QualityReport report;
     double squared = 0, max_error = 0, alignment = 0;
-    SeamJump albedo_seams, normal_seams;
+    SeamJump albedo_seams, normal_seams, input_seams;
     std::size_t values_fg = 0, values_full = 0;
     GBuffer g;
     std::vector<FieldOutputs> outputs;
@@ -983,10 +983,13 @@ QualityReport Trainer::evaluate_held_out() const {
         const Camera camera = held_out_view(k);
         trace_and_evaluate(camera, g, outputs);
         values_full += 3 * g.pixel_count();  // background: white in both, zero error (spec 5.2)
+        Image input_albedo(g.width, g.height, 3, 1.0f);
         std::size_t q = 0;
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] <= 0.0f) continue;
-            const Vec3f e = outputs[q++].albedo - sample_albedo(*m_target.material, mesh, g, p, true);
+            const Vec3f target = sample_albedo(*m_target.material, mesh, g, p, true);
+            std::copy(&target.x, &target.x + 3, input_albedo.data() + 3 * p);
+            const Vec3f e = outputs[q++].albedo - target;
             for (int c = 0; c < 3; ++c) {
                 squared += double(e[c]) * e[c];
                 max_error = std::max(max_error, double(std::fabs(e[c])));
@@ -996,11 +999,13 @@ QualityReport Trainer::evaluate_held_out() const {
         const LearnedImages learned = learned_images(camera, g, outputs);
         alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
         albedo_seams.add(g, learned.albedo, cfg.texture_size);
+        input_seams.add(g, input_albedo, cfg.texture_size);
         normal_seams.add(g, learned.view_normals, cfg.texture_size);
     }
     report.seam_jump_ratio_albedo = albedo_seams.ratio();
     report.seam_jump_ratio_normal = normal_seams.ratio();
     report.seam_pairs = albedo_seams.seam_pairs;
+    report.input_seam_jump_ratio_albedo = input_seams.ratio();
     const auto psnr = [](double sum, std::size_t count) {
         if (count == 0) return 0.0;
         const double mse = sum / double(count);
@@ -1064,6 +1069,7 @@ Json QualityReport::to_json() const {
             {"target_tilt_distance", target_tilt_distance},
             {"seam_jump_ratio_albedo", seam_jump_ratio_albedo},
             {"seam_jump_ratio_normal", seam_jump_ratio_normal},
+            {"input_seam_jump_ratio_albedo", input_seam_jump_ratio_albedo},
             {"seam_pixel_pairs", seam_pairs},
             {"held_out_views", views},
             {"held_out_patches", patches}};

@@ -41,7 +41,8 @@ TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albed
 /// of an image between horizontally or vertically neighbouring surface pixels of a traced view,
 /// split into pairs whose UVs jump (they differ from what the ray differentials predict by more
 /// than 8 pixels' worth plus two texels of a `map_size` map: the two pixels lie on different
-/// charts) and pairs inside a chart. Accumulates over views; `ratio()` is seam / interior.
+/// charts) and pairs inside a chart; pairs across a depth jump of more than 1 % (occlusion
+/// edges) count as neither. Accumulates over views; `ratio()` is seam / interior.
 struct SeamJump {
     double seam_sum = 0, interior_sum = 0;
     std::size_t seam_pairs = 0, interior_pairs = 0;

@@ -83,6 +83,9 @@ struct QualityReport {
     /// across UV seams over the jump inside charts, on the held-out views (SeamJump).
     double seam_jump_ratio_albedo = 0;
     double seam_jump_ratio_normal = 0;
+    /// The same measure of the input's own albedo (its texture through its UVs) on those views:
+    /// what the asset had before training.
+    double input_seam_jump_ratio_albedo = 0;
     std::size_t seam_pairs = 0;
     int views = 0;
     int patches = 0;
