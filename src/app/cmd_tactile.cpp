@@ -10,6 +10,8 @@
 #include <tdf/tactile/pipeline.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -200,7 +202,17 @@ struct NormalArgs {
                         strength,
                         "factor on the slopes, or auto: 1 when the slopes are known and the textured "
                         "region's mean detail tilt is >= 2 degrees, else the factor giving 8 degrees")
-            ->check(CLI::IsMember({"auto"}) | CLI::PositiveNumber)
+            ->check(CLI::Validator(
+                [](std::string& text) -> std::string {
+                    // "auto", or a finite positive number (CLI11's PositiveNumber lets NaN through).
+                    if (text == "auto") return {};
+                    char* end = nullptr;
+                    const double value = std::strtod(text.c_str(), &end);
+                    if (end == text.c_str() || *end != '\0' || !std::isfinite(value) || !(value > 0))
+                        return "must be auto or a finite number > 0, got " + text;
+                    return {};
+                },
+                "auto|NUMBER > 0"))
             ->capture_default_str();
         app->add_option("--bits",
                         bits,
@@ -353,6 +365,7 @@ void run_quilt(const State& s) {
 
 void require_normal_map_name(const std::string& path) {
     check_output_extension(path, {".png", ".exr"}, "a normal map (-o)");
+    check_output_file_name(path);
 }
 
 void run_normal(const State& s) {

@@ -22,12 +22,16 @@ void ensure_folder(const std::string& folder) {
     if (ec) throw_error("cannot create folder '{}': {}", folder, ec.message());
 }
 
+void check_output_file_name(const std::string& path) {
+    std::error_code status_error;
+    if (fs::is_directory(fs::path(path), status_error))
+        throw_error("cannot write '{}': it is a folder, not a file name", path);
+}
+
 void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write) {
     static std::atomic<unsigned> counter{0};
     const fs::path final_path(path);
-    std::error_code status_error;
-    if (fs::is_directory(final_path, status_error))
-        throw_error("cannot write '{}': it is a folder, not a file name", path);
+    check_output_file_name(path);
     ensure_folder(final_path.parent_path().string());
     const fs::path temporary = final_path.parent_path() /
                                (final_path.stem().string() + ".tmp" + std::to_string(getpid()) + "_" +

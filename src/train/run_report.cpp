@@ -126,7 +126,9 @@ void write_optimize_report(const std::string& folder, const std::string& name, c
         }
     }
     const std::string page = folder + "/" + name + "_report.html";
-    write_run_report(page, collect_run_report(folder, name, scene_path, assets.mesh, config));
+    // The 3D view shows the exported .glb, which is in the input file's coordinates (not the
+    // normalised ones the turntables were rendered in): frame that mesh.
+    write_run_report(page, collect_run_report(folder, name, scene_path, assets.export_mesh(), config));
     log_info("report: {} ({:.1f} s)",
              page,
              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

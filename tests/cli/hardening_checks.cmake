@@ -45,11 +45,12 @@ check(1 "^tdf help: 'tdf tactile' has no command 'bogus'" "" ${TDF} help tactile
 # Usage errors: one line naming the command, exit 1 (README "Errors"), not CLI11's 105-109.
 check(1 "^tdf render: .*--bogus" "" ${TDF} render ${_scene} -o ${OUT_DIR}/x --bogus)
 check(1 "^tdf render: .*required" "" ${TDF} render)
-check(1 "^tdf tactile: --strength: Value 1e400 not in range 0.000000 to 1.8e\\+308 \\(see `tdf help tactile normal`\\)$" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/n.png --strength 1e400)
+# --strength also accepts "auto" (issue 11): its own check names the option on one line.
+check(1 "^tdf tactile: --strength: must be auto or a finite number > 0, got 1e400 \\(see `tdf help tactile normal`\\)$" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/n.png --strength 1e400)
 check(1 "^tdf render: --threads: Value -3 not in range 0 to 4096" "" ${TDF} --threads -3 render ${_scene} -o ${OUT_DIR}/x)
 
 # Non-finite options are errors naming the option.
-check(1 "^tdf tactile: --strength: must be a finite number, got nan" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/n.png --strength nan)
+check(1 "^tdf tactile: --strength: must be (auto or )?a finite number( > 0)?, got nan" "" ${TDF} tactile normal ${_normal} -o ${OUT_DIR}/n.png --strength nan)
 check(1 "^tdf tactile: --mm-per-pixel: must be a finite number, got nan" "" ${TDF} tactile height ${_normal} -o ${OUT_DIR}/h.exr --mm-per-pixel nan)
 check(1 "^tdf tactile: --mm-per-pixel: (must be a finite number, got inf|Value inf not in range)" "" ${TDF} tactile height ${_normal} -o ${OUT_DIR}/h.exr --mm-per-pixel inf)
 

@@ -54,9 +54,9 @@ expect(2 "is 32x24 but" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/b
 expect(1 "^tdf compare: .*absent.exr" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/absent.exr)
 
 # compare never passes by mistake: option values are validated (NaN used to pass every pair).
-expect(1 "^tdf compare: --fail must be a finite number" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --fail nan)
+expect(1 "^tdf compare: --fail:? must be a finite number" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --fail nan)
 expect(1 "^tdf compare: --failpercent must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --failpercent 101)
-expect(1 "^tdf compare: --hardfail must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --hardfail nan)
+expect(1 "^tdf compare: --hardfail:? must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --hardfail nan)
 expect(1 "^tdf compare: --erode-mask must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --erode-mask -1)
 expect(1 "^tdf compare: --diff-scale must be" ${TDF} compare ${OUT_DIR}/turn/view_000.exr ${OUT_DIR}/turn/view_001.exr --diff-scale 0)
 # JSON of identical images: PSNR null with psnr_infinite, never the string "inf".

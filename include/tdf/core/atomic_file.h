@@ -12,6 +12,10 @@ namespace tdf {
 /// work. Creates missing parent folders.
 void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write);
 
+/// Throws tdf::Error ("cannot write '<path>': it is a folder, not a file name") when `path` names
+/// a folder: commands call it before long work so the error comes first.
+void check_output_file_name(const std::string& path);
+
 /// Writes `text` to `path` atomically.
 void write_text_atomically(const std::string& path, const std::string& text);
 
