@@ -73,31 +73,8 @@ int run_parts(const PartsCommandOptions& o) {
 
     if (o.target) {
         const auto start = std::chrono::steady_clock::now();
-        std::vector<MipTexture> maps;
-        std::vector<PartTactile> tactile;
-        maps.reserve(description.parts.parts.size());
-        for (const PartSpec& p : description.parts.parts) {
-            const TactileMap map = load_tactile_map(p.tactile_images.front());
-            maps.emplace_back(map.normals);
-            float scale = p.layout.repeat;
-            if (p.layout.mode == "physical") {
-                const float mm_per_pixel =
-                    p.layout.mm_per_pixel > 0 ? p.layout.mm_per_pixel : map.mm_per_pixel;
-                if (!(mm_per_pixel > 0))
-                    throw_error(
-                        "{}: part '{}': layout.mode is 'physical' but '{}' has no tdf:mm_per_pixel metadata "
-                        "and "
-                        "layout.mm_per_pixel is not set",
-                        o.scene_path,
-                        p.name,
-                        p.tactile_images.front());
-                scale = physical_tactile_uv_scale(
-                    *input.atlas, p.layout.mm_per_unit, map.normals.width(), mm_per_pixel);
-            }
-            tactile.push_back({nullptr, scale});
-        }
-        for (std::size_t p = 0; p < maps.size(); ++p) tactile[p].map = &maps[p];
-        const std::vector<Image> layers = lay_part_maps(tactile, seg.size);
+        const ScenePartMaps laid = lay_scene_part_maps(description.parts, *input.atlas, seg.size, o.scene_path);
+        const std::vector<Image>& layers = laid.layers;
         const std::vector<int> labels = dilate_labels(seg.texel_part, seg.size, o.gutter);
         const Image target = compose_part_target(labels, seg.size, layers, o.band);
         write_atomically(base + "_tactile_target.png", [&](const std::string& tmp) {
@@ -107,7 +84,7 @@ int run_parts(const PartsCommandOptions& o) {
         const double seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         Json scales = Json::array();
-        for (const PartTactile& t : tactile) scales.push_back(t.uv_scale);
+        for (float scale : laid.uv_scales) scales.push_back(scale);
         report["target"] = {{"band_width_texels", o.band},
                             {"uv_scale", scales},
                             {"bleed_texels", m.bleed_texels},

@@ -5,6 +5,8 @@
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/io/image_io.h>
+#include <tdf/render/material_sampling.h>
+#include <tdf/tactile/tactile_map.h>
 
 #include <algorithm>
 #include <cmath>
@@ -321,6 +323,31 @@ Json write_part_maps(const std::string& base, const std::vector<int>& labels, in
     write_text_atomically(base + "_label_legend.json",
                           Json{{"size", size}, {"parts", legend}}.dump(2) + "\n");
     return legend;
+}
+
+ScenePartMaps lay_scene_part_maps(const PartsSpec& spec, const TriangleMesh& atlas, int size,
+                                  const std::string& where) {
+    std::vector<MipTexture> maps;
+    std::vector<PartTactile> tactile;
+    maps.reserve(spec.parts.size());  // PartTactile points into it: no reallocation
+    for (const PartSpec& p : spec.parts) {
+        const TactileMap map = load_tactile_map(p.tactile_images.front());
+        maps.emplace_back(map.normals);
+        float scale = p.layout.repeat;
+        if (p.layout.mode == "physical") {
+            const float mm_per_pixel = p.layout.mm_per_pixel > 0 ? p.layout.mm_per_pixel : map.mm_per_pixel;
+            if (!(mm_per_pixel > 0))
+                throw_error("{}: part '{}': layout.mode is 'physical' but '{}' has no tdf:mm_per_pixel metadata and "
+                            "layout.mm_per_pixel is not set",
+                            where, p.name, p.tactile_images.front());
+            scale = physical_tactile_uv_scale(atlas, p.layout.mm_per_unit, map.normals.width(), mm_per_pixel);
+        }
+        tactile.push_back({&maps.back(), scale});
+    }
+    ScenePartMaps out;
+    for (const PartTactile& t : tactile) out.uv_scales.push_back(t.uv_scale);
+    out.layers = lay_part_maps(tactile, size);
+    return out;
 }
 
 }  // namespace tdf

@@ -150,24 +150,7 @@ PartTraining prepare_part_training(const SceneDescription& description, const Tr
     PartTraining parts;
     parts.segmentation = segment_parts(description.parts, input);
     parts.labels = dilate_labels(parts.segmentation.texel_part, size, gutter);
-    std::vector<MipTexture> maps;
-    std::vector<PartTactile> tactile;
-    maps.reserve(description.parts.parts.size());
-    for (const PartSpec& p : description.parts.parts) {
-        const TactileMap map = load_tactile_map(p.tactile_images.front());
-        maps.emplace_back(map.normals);
-        float scale = p.layout.repeat;
-        if (p.layout.mode == "physical") {
-            const float mm_per_pixel = p.layout.mm_per_pixel > 0 ? p.layout.mm_per_pixel : map.mm_per_pixel;
-            if (!(mm_per_pixel > 0))
-                throw_error("{}: part '{}': layout.mode is 'physical' but '{}' has no tdf:mm_per_pixel metadata and "
-                            "layout.mm_per_pixel is not set", where, p.name, p.tactile_images.front());
-            scale = physical_tactile_uv_scale(mesh, p.layout.mm_per_unit, map.normals.width(), mm_per_pixel);
-        }
-        tactile.push_back({nullptr, scale});
-    }
-    for (std::size_t p = 0; p < maps.size(); ++p) tactile[p].map = &maps[p];
-    parts.layers = lay_part_maps(tactile, size);
+    parts.layers = lay_scene_part_maps(description.parts, mesh, size, where).layers;
     parts.target = compose_part_target(parts.labels, size, parts.layers);
     return parts;
 }

@@ -57,6 +57,13 @@ Vec3f target_view_normal(const TrainingTarget& t, const GBuffer& g, std::size_t 
     return tangent_to_view(g, i, r, target_tangent_normal(t, g, i));
 }
 
+// A 3-channel map's value from recorded taps (the learned and target maps all have 3 channels).
+Vec3f gather3(const MipTexture& map, const TrilinearTaps& taps) {
+    float value[kMaxTextureChannels];
+    map.gather(taps, value);
+    return {value[0], value[1], value[2]};
+}
+
 void copy_into(const Image& image, float* out) { std::copy(image.values().begin(), image.values().end(), out); }
 
 }  // namespace
@@ -509,7 +516,6 @@ void Trainer::evaluate_surface(bool with_view_normals) {
     b.curvature.assign(n, 0.0f);
     parallel_for(n, kPixelGrain, [&](std::size_t begin, std::size_t end) {
         TrilinearTaps taps;
-        float value[3];
         for (std::size_t q = begin; q < end; ++q) {
             const GBuffer& g = b.gbuffers[b.hit_view[q]];
             const std::size_t p = b.hit_pixel[q];
@@ -521,13 +527,9 @@ void Trainer::evaluate_surface(bool with_view_normals) {
             // Patches read only the normal map; views the albedo, and the normals only for the
             // visual guidance's shading and control images.
             const bool patch = q < b.patch_hit_count;
-            if (!patch) {
-                albedo.gather(taps, value);
-                b.outputs[q].albedo = {value[0], value[1], value[2]};
-            }
+            if (!patch) b.outputs[q].albedo = gather3(albedo, taps);
             if (patch || with_view_normals) {
-                normal.gather(taps, value);  // same size, same taps
-                b.raw_normal[q] = {value[0], value[1], value[2]};
+                b.raw_normal[q] = gather3(normal, taps);  // same size, same taps
                 // Renormalised per pixel as the training renderer does with its maps (spec 3.1 step 5).
                 b.outputs[q].normal = safe_normalize(b.raw_normal[q]);
             }
@@ -644,10 +646,8 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
 Vec3f Trainer::lookup_target_normal(std::size_t q) const {
     const Batch& b = *m_batch;
     TrilinearTaps taps;
-    float value[3];
     m_tactile_target_texture.taps(b.lookup_uv[q], b.lookup_lod[q], -1, taps);
-    m_tactile_target_texture.gather(taps, value);
-    return safe_normalize(Vec3f{value[0], value[1], value[2]});
+    return safe_normalize(gather3(m_tactile_target_texture, taps));
 }
 
 // ---- 4b. Visual terms on the global views (spec 5.2, 5.4) -----------------------------------
@@ -696,10 +696,8 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
         const auto input_albedo = [&](std::size_t p, std::size_t q) {
             if (!texture_space()) return sample_albedo(*m_target.material, mesh, g, p, true);
             TrilinearTaps taps;
-            float value[3];
             m_albedo_target_texture.taps(b.lookup_uv[q], b.lookup_lod[q], -1, taps);
-            m_albedo_target_texture.gather(taps, value);
-            return Vec3f{value[0], value[1], value[2]};
+            return gather3(m_albedo_target_texture, taps);
         };
         render_internal(input_albedo, b.albedo_target.data() + std::size_t(k) * view_values);
         if (visual_guidance) {
@@ -926,14 +924,11 @@ void Trainer::evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs
     const MipTexture& normal = m_maps->normal();
     parallel_for(hits.size(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
         TrilinearTaps taps;
-        float value[3];
         for (std::size_t q = begin; q < end; ++q) {
             const std::size_t p = hits[q];
             albedo.taps(g.uv[p], albedo.level_of_detail(g.duv_dx[p], g.duv_dy[p]), -1, taps);
-            albedo.gather(taps, value);
-            outputs[q].albedo = {value[0], value[1], value[2]};
-            normal.gather(taps, value);
-            outputs[q].normal = safe_normalize(Vec3f{value[0], value[1], value[2]});
+            outputs[q].albedo = gather3(albedo, taps);
+            outputs[q].normal = safe_normalize(gather3(normal, taps));
             outputs[q].label[0] = outputs[q].label[1] = 0.0f;
         }
     });
@@ -1033,11 +1028,9 @@ QualityReport Trainer::evaluate_held_out() const {
             if (m_target.tactile_target_override) {
                 // Multi-part: the composed target over the atlas, sampled as the learned map is.
                 TrilinearTaps taps;
-                float value[3];
                 m_tactile_target_texture.taps(
                     g.uv[p], m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]), -1, taps);
-                m_tactile_target_texture.gather(taps, value);
-                target = safe_normalize(Vec3f{value[0], value[1], value[2]});
+                target = safe_normalize(gather3(m_tactile_target_texture, taps));
             } else {
                 target = target_tangent_normal(m_target, g, p);
             }

@@ -7,7 +7,9 @@
 /// Also the per-part masks and the label map exports.
 #include <tdf/core/config.h>
 #include <tdf/core/image.h>
+#include <tdf/mesh/triangle_mesh.h>
 #include <tdf/render/texture.h>
+#include <tdf/scene/scene_file.h>
 
 #include <string>
 #include <vector>
@@ -25,6 +27,19 @@ struct PartTactile {
 /// Each part's map laid over the WHOLE size x size atlas (bilinear at texel centres, v up, the
 /// UvRaster convention), ignoring labels: the layers compose_part_target selects from.
 std::vector<Image> lay_part_maps(const std::vector<PartTactile>& parts, int size);
+
+/// The parts of a scene laid over an atlas: each part's first tactile map at its layout's scale
+/// (`repeat`, or for `physical` physical_tactile_uv_scale with the part's mm_per_pixel or the map's
+/// own metadata) and the layers lay_part_maps makes of them.
+struct ScenePartMaps {
+    std::vector<float> uv_scales;  ///< per part
+    std::vector<Image> layers;     ///< per part, size x size
+};
+
+/// Loads every part's tactile map and lays it over `atlas`'s UVs at size x size. Throws
+/// tdf::Error naming `where` and the part when a physical layout has no millimetres per pixel.
+ScenePartMaps lay_scene_part_maps(const PartsSpec& spec, const TriangleMesh& atlas, int size,
+                                  const std::string& where);
 
 /// Blend band, in texels: a texel at centre distance d from the nearest texel of another part
 /// keeps weight min(1, 0.5 + 0.5 (d - 0.5) / band) for its own part (the rest goes to that
