@@ -104,7 +104,28 @@ void png_error_handler(png_structp png, png_const_charp message) {
 void png_warning_handler(png_structp, png_const_charp) {}
 
 // `file` holds the image (a file or memory); `path` names it in messages.
+// Walks the chunk headers before libpng does: a chunk cannot hold more bytes than the file has
+// left, and libpng allocates what a text chunk's header claims (1.5 GB from a 100-byte file,
+// found by fuzzing). Leaves the file where it was.
+void check_png_chunks(std::FILE* file, const std::string& path, std::uint64_t file_size) {
+    const long start = std::ftell(file);
+    std::uint64_t offset = 8;  // the signature
+    unsigned char header[8];
+    while (offset + 8 <= file_size && std::fseek(file, long(offset), SEEK_SET) == 0 &&
+           std::fread(header, 1, 8, file) == 8) {
+        const std::uint64_t length = (std::uint64_t(header[0]) << 24) | (std::uint64_t(header[1]) << 16) |
+                                     (std::uint64_t(header[2]) << 8) | std::uint64_t(header[3]);
+        if (offset + 12 + length > file_size)
+            throw_error("cannot read PNG '{}': a '{:.4s}' chunk at byte {} claims {} bytes, the file has {} left",
+                        path, reinterpret_cast<const char*>(header + 4), offset, length, file_size - offset - 8);
+        if (std::memcmp(header + 4, "IEND", 4) == 0) break;
+        offset += 12 + length;
+    }
+    std::fseek(file, start, SEEK_SET);
+}
+
 Image read_png(std::FILE* file, const std::string& path, std::uint64_t file_size, ImageMetadata* metadata) {
+    check_png_chunks(file, path, file_size);
     PngErrorContext context{path, {}};
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler,
                                              png_warning_handler);
