@@ -122,7 +122,8 @@ std::string find_albedo_texture(const fs::path& obj_path, const std::string& mtl
     }
     if (texture.empty()) return {};
     fs::path texture_path = mtl_path.parent_path() / texture;
-    if (!fs::is_regular_file(texture_path)) {
+    std::error_code status;  // a name the file system rejects (too long, ...) is a missing texture
+    if (!fs::is_regular_file(texture_path, status)) {
         log_warning("{}: albedo texture '{}' not found", mtl_path.string(), texture_path.string());
         return {};
     }
