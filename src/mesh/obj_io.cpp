@@ -99,7 +99,7 @@ std::string find_albedo_texture(const fs::path& obj_path, const std::string& mtl
     candidates.push_back(folder / (obj_path.stem().string() + ".mtl"));
     fs::path mtl_path;
     for (const auto& c : candidates)
-        if (fs::is_regular_file(c)) {
+        if (std::error_code ignored; fs::is_regular_file(c, ignored)) {
             mtl_path = c;
             break;
         }
