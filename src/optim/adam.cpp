@@ -28,14 +28,24 @@ T take(const std::string& in, std::size_t& pos, const std::string& what) {
 
 }  // namespace
 
-std::string AdamState::to_bytes() const {
-    TDF_CHECK_EQ(m.size(), v.size());
+std::string AdamState::blob_header(std::uint64_t parameter_count, std::int64_t step) {
     std::string out;
-    out.reserve(32 + 8 * m.size());
     out.append(kMagic, sizeof(kMagic));
     append(out, kVersion);
-    append(out, std::uint64_t(m.size()));
+    append(out, parameter_count);
     append(out, step);
+    return out;
+}
+
+std::uint64_t AdamState::blob_size(std::uint64_t parameter_count) {
+    return sizeof(kMagic) + sizeof(kVersion) + sizeof(std::uint64_t) + sizeof(std::int64_t) +
+           2 * sizeof(float) * parameter_count;
+}
+
+std::string AdamState::to_bytes() const {
+    TDF_CHECK_EQ(m.size(), v.size());
+    std::string out = blob_header(m.size(), step);
+    out.reserve(blob_size(m.size()));
     out.append(reinterpret_cast<const char*>(m.data()), m.size() * sizeof(float));
     out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(float));
     return out;

@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <cstdint>
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 
@@ -32,23 +33,57 @@ T read_at(const std::string& in, std::size_t pos) {
 
 void save_field_checkpoint(const std::string& path, const std::vector<float>& parameters,
                            const AdamState& adam, const std::string& extra) {
-    const std::string adam_bytes = adam.to_bytes();
-    std::string out;
-    out.reserve(kHeaderSize + parameters.size() * sizeof(float) + adam_bytes.size() + extra.size() + 8);
-    out.append(kMagic, sizeof(kMagic));
-    append(out, kVersion);
-    append(out, std::uint32_t(0));
-    append(out, std::uint64_t(parameters.size()));
-    append(out, std::uint64_t(adam_bytes.size()));
-    append(out, std::uint64_t(extra.size()));
-    out.append(reinterpret_cast<const char*>(parameters.data()), parameters.size() * sizeof(float));
-    out += adam_bytes;
-    out += extra;
-    append(out, fnv1a(out.data(), out.size()));
+    CheckpointPieces pieces;
+    pieces.parameters = {{parameters.data(), parameters.size()}};
+    pieces.m = {{adam.m.data(), adam.m.size()}};
+    pieces.v = {{adam.v.data(), adam.v.size()}};
+    pieces.step = adam.step;
+    save_field_checkpoint(path, pieces, extra);
+}
+
+void save_field_checkpoint(const std::string& path, const CheckpointPieces& pieces, const std::string& extra) {
+    const auto count = [](const std::vector<FloatRange>& ranges) {
+        std::uint64_t n = 0;
+        for (const FloatRange& r : ranges) n += r.size;
+        return n;
+    };
+    const std::uint64_t parameter_count = count(pieces.parameters);
+    TDF_CHECK_EQ(count(pieces.m), parameter_count);
+    TDF_CHECK_EQ(count(pieces.v), parameter_count);
+    std::string header;
+    header.append(kMagic, sizeof(kMagic));
+    append(header, kVersion);
+    append(header, std::uint32_t(0));
+    append(header, parameter_count);
+    append(header, AdamState::blob_size(parameter_count));
+    append(header, std::uint64_t(extra.size()));
     write_atomically(path, [&](const std::string& temporary) {
         std::ofstream file(temporary, std::ios::binary);
         if (!file) throw_error("{}: cannot open for writing: {}", path, std::strerror(errno));
-        file.write(out.data(), std::streamsize(out.size()));
+        std::uint64_t checksum = kFnv1aSeed;
+        const auto put = [&](const char* bytes, std::size_t size) {
+            checksum = fnv1a(bytes, size, checksum);
+            file.write(bytes, std::streamsize(size));
+        };
+        const auto put_ranges = [&](const std::vector<FloatRange>& ranges) {
+            static const std::vector<float> zeros(1 << 14, 0.0f);
+            for (const FloatRange& r : ranges) {
+                if (r.data) {
+                    put(reinterpret_cast<const char*>(r.data), r.size * sizeof(float));
+                    continue;
+                }
+                for (std::size_t done = 0; done < r.size; done += zeros.size())
+                    put(reinterpret_cast<const char*>(zeros.data()), std::min(zeros.size(), r.size - done) * sizeof(float));
+            }
+        };
+        put(header.data(), header.size());
+        put_ranges(pieces.parameters);
+        const std::string adam_header = AdamState::blob_header(parameter_count, pieces.step);
+        put(adam_header.data(), adam_header.size());
+        put_ranges(pieces.m);
+        put_ranges(pieces.v);
+        put(extra.data(), extra.size());
+        file.write(reinterpret_cast<const char*>(&checksum), sizeof(checksum));
         file.flush();
         if (!file) throw_error("{}: cannot write checkpoint: {} (disk full?)", path, std::strerror(errno));
     });

@@ -252,7 +252,7 @@ void run_optimize(const OptimizeOptions& options) {
                             {"seed", description.seed},
                             {"config", resolved_text},
                             {"losses", log.to_json_lines()}};
-        save_field_checkpoint(checkpoint_path, trainer.parameters(), trainer.optimizer_state(), extra.dump());
+        save_field_checkpoint(checkpoint_path, trainer.checkpoint_pieces(), extra.dump());
     };
     const auto write_log = [&] {
         write_text_atomically(base + "_losses.jsonl", log.to_json_lines());
@@ -326,6 +326,7 @@ void run_optimize(const OptimizeOptions& options) {
         return;
     }
 
+    trainer.release_training_buffers();
     const BakedMaps maps = trainer.export_maps();
     write_asset(options.output_dir, name, "", maps, export_mesh, config);
     const QualityReport quality = trainer.evaluate_held_out();

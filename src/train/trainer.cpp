@@ -203,6 +203,23 @@ AdamState Trainer::optimizer_state() const {
     return state;
 }
 
+CheckpointPieces Trainer::checkpoint_pieces() const {
+    const AdamState& field = m_adam->state();
+    CheckpointPieces pieces;
+    pieces.parameters = {{m_field->parameters().data(), m_field->parameters().size()}};
+    pieces.m = {{field.m.data(), field.m.size()}};
+    pieces.v = {{field.v.data(), field.v.size()}};
+    pieces.step = field.step;
+    if (m_maps) {
+        const std::vector<float>& residual = m_maps->residual();
+        pieces.parameters.push_back({residual.data(), residual.size()});
+        const AdamState* r = m_residual_adam ? &m_residual_adam->state() : nullptr;
+        pieces.m.push_back({r ? r->m.data() : nullptr, residual.size()});  // Jacobi: zeros, as optimizer_state()
+        pieces.v.push_back({r ? r->v.data() : nullptr, residual.size()});
+    }
+    return pieces;
+}
+
 void Trainer::restore(int iteration, const std::vector<float>& parameters, const AdamState& adam) {
     const std::size_t field_count = m_field->parameter_count();
     const std::size_t residual_count = m_maps ? m_maps->residual().size() : 0;
@@ -282,6 +299,8 @@ Trainer::Phase Trainer::phase_of(int i) const {
     return phase;
 }
 
+void Trainer::release_training_buffers() { m_batch = std::make_unique<Batch>(); }
+
 LossRecord Trainer::step() {
     const int i = m_iteration;
     if (texture_space() && i < m_config.init_iterations) return fit_maps(i);
@@ -301,20 +320,23 @@ LossRecord Trainer::loss_and_gradient(int i) {
     Rng rng = Rng::stream(m_seed, std::uint64_t(i));
     auto t0 = Clock::now();
     sample_cameras(rng);
-    trace_views();
     m_times.tracing += seconds_since(t0);
-
-    t0 = Clock::now();
-    evaluate_surface(phase.visual_guidance);
-    m_times.field_forward += seconds_since(t0);
 
     LossRecord record;
     record.iteration = i;
-    t0 = Clock::now();
-    const double guidance_before = m_times.guidance;
-    tactile_terms(phase, record);
-    visual_terms(phase, record);
-    m_times.losses += seconds_since(t0) - (m_times.guidance - guidance_before);
+    const std::size_t patches = std::size_t(m_config.patch_batch_size), all = m_batch->cameras.size();
+    if (texture_space()) {
+        // Patches send gradients only to the normal map and views only to the albedo map, so the
+        // two halves run one after the other in the same buffers: an iteration's memory is that
+        // of its larger half, not of both.
+        begin_map_gradients();
+        run_views(phase, 0, patches, record);
+        swap_patch_and_view_buffers();
+        run_views(phase, patches, all, record);
+        swap_patch_and_view_buffers();
+    } else {
+        run_views(phase, 0, all, record);
+    }
 
     double total = 0;
     for (const auto& [name, value] : record.terms) {
@@ -327,6 +349,38 @@ LossRecord Trainer::loss_and_gradient(int i) {
     backward(i);
     m_times.field_backward += seconds_since(t0);
     return record;
+}
+
+void Trainer::run_views(const Phase& phase, std::size_t first, std::size_t last, LossRecord& record) {
+    const std::size_t patches = std::size_t(m_config.patch_batch_size);
+    auto t0 = Clock::now();
+    trace_views(first, last);
+    m_times.tracing += seconds_since(t0);
+
+    t0 = Clock::now();
+    evaluate_surface(phase.visual_guidance);
+    m_times.field_forward += seconds_since(t0);
+
+    t0 = Clock::now();
+    const double guidance_before = m_times.guidance;
+    if (first < patches) tactile_terms(phase, record);
+    if (last > patches) visual_terms(phase, record);
+    m_times.losses += seconds_since(t0) - (m_times.guidance - guidance_before);
+    if (texture_space()) {
+        t0 = Clock::now();
+        scatter_map_gradients();
+        m_times.field_backward += seconds_since(t0);
+    }
+}
+
+void Trainer::swap_patch_and_view_buffers() {
+    Batch& b = *m_batch;
+    const std::size_t patches = std::size_t(m_config.patch_batch_size);
+    const std::size_t views = b.gbuffers.size() - patches;
+    for (std::size_t k = 0; k < std::min(patches, views); ++k) {
+        std::swap(b.gbuffers[k], b.gbuffers[patches + k]);
+        std::swap(b.point_of[k], b.point_of[patches + k]);
+    }
 }
 
 std::vector<float> Trainer::gradient() const {
@@ -470,17 +524,19 @@ void Trainer::sample_cameras(Rng& rng) {
 }
 
 // ---- 2. Tracing, and the list of hits (background pixels need no evaluation, spec 13.18) ----
-void Trainer::trace_views() {
+// Traces the cameras [first, last); the hits of this range replace the previous ones.
+void Trainer::trace_views(std::size_t first, std::size_t last) {
     Batch& b = *m_batch;
-    for (std::size_t k = 0; k < b.cameras.size(); ++k)
+    const std::size_t patches = std::size_t(m_config.patch_batch_size);
+    for (std::size_t k = first; k < last; ++k)
         trace_gbuffer(*m_target.scene, *m_target.mesh, b.cameras[k], b.gbuffers[k]);
     b.point_of.resize(b.gbuffers.size());
     b.points.clear();
     b.patch_hit_count = 0;
     b.hit_pixel.clear();
     b.hit_view.clear();
-    for (std::size_t k = 0; k < b.gbuffers.size(); ++k) {
-        if (k == std::size_t(m_config.patch_batch_size)) b.patch_hit_count = b.hit_pixel.size();
+    for (std::size_t k = first; k < last; ++k) {
+        if (k == patches) b.patch_hit_count = b.hit_pixel.size();
         const GBuffer& g = b.gbuffers[k];
         std::vector<int>& point_of = b.point_of[k];
         point_of.resize(g.pixel_count());
@@ -495,7 +551,7 @@ void Trainer::trace_views() {
             }
         }
     }
-    if (b.gbuffers.size() <= std::size_t(m_config.patch_batch_size)) b.patch_hit_count = b.hit_pixel.size();
+    if (last <= patches) b.patch_hit_count = b.hit_pixel.size();
 }
 
 // ---- 3. The surface at every hit: field (pixel) or learned maps (texture) -------------------
@@ -830,22 +886,19 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
 }
 
 // ---- 5. Backward to the parameters ----------------------------------------------------------
-void Trainer::backward(int i) {
+void Trainer::begin_map_gradients() {
     Batch& b = *m_batch;
-    const std::size_t n = b.hit_pixel.size();
-    std::fill(m_gradient.begin(), m_gradient.end(), 0.0f);
-    if (!texture_space()) {
-        m_field->backward(b.points.data(), b.grads.data(), n, m_gradient, b.field_cache);
-        for (float g : m_gradient)
-            if (!std::isfinite(g)) throw_error("iteration {}: the field gradient is not finite; the field was not updated", i);
-        return;
-    }
-    // The adjoint of the map lookups: each hit's gradient goes to the texels it blended. Albedo
-    // and normal maps are independent, so the two scatters run side by side, each in hit order
-    // (fixed summation order: the same bits on any thread count).
-    // Channel 3 accumulates the hits' loss curvature through the same taps (the Jacobi step).
     b.albedo_gradient.reset(m_maps->albedo(), 4);
     b.normal_gradient.reset(m_maps->normal(), 4);
+}
+
+// The adjoint of the map lookups: each hit's gradient goes to the texels it blended. Albedo and
+// normal maps are independent, so the two scatters run side by side, each in hit order (fixed
+// summation order: the same bits on any thread count).
+// Channel 3 accumulates the hits' loss curvature through the same taps (the Jacobi step).
+void Trainer::scatter_map_gradients() {
+    Batch& b = *m_batch;
+    const std::size_t n = b.hit_pixel.size();
     const MipTexture& albedo = m_maps->albedo();
     const std::size_t patch_hits = b.patch_hit_count;
     parallel_for(2, 1, [&](std::size_t begin, std::size_t end) {
@@ -864,6 +917,19 @@ void Trainer::backward(int i) {
             }
         }
     });
+}
+
+void Trainer::backward(int i) {
+    Batch& b = *m_batch;
+    const std::size_t n = b.hit_pixel.size();
+    std::fill(m_gradient.begin(), m_gradient.end(), 0.0f);
+    if (!texture_space()) {
+        m_field->backward(b.points.data(), b.grads.data(), n, m_gradient, b.field_cache);
+        for (float g : m_gradient)
+            if (!std::isfinite(g)) throw_error("iteration {}: the field gradient is not finite; the field was not updated", i);
+        return;
+    }
+    // The hits were scattered into the map gradients view by view (scatter_map_gradients).
     b.albedo_gradient.collapse();
     b.normal_gradient.collapse();
     m_residual_gradient.assign(m_maps->residual().size(), 0.0f);

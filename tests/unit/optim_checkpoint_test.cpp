@@ -37,6 +37,35 @@ TEST(Checkpoint, RoundTripIsExact) {
     EXPECT_EQ(files, 1);
 }
 
+TEST(Checkpoint, PiecesWriteTheSameBytesAsTheConcatenatedForm) {
+    // A trainer streams its field and its residual (whose moments may be implicit zeros) as
+    // pieces; the file must be the one the concatenated vectors give.
+    const std::vector<float> field = {1.0f, -2.0f, 3.0f}, residual = {0.25f, 0.5f};
+    AdamState field_state;
+    field_state.m = {0.1f, 0.2f, 0.3f};
+    field_state.v = {0.01f, 0.02f, 0.03f};
+    field_state.step = 12;
+    AdamState whole = field_state;
+    whole.m.insert(whole.m.end(), {0.0f, 0.0f});
+    whole.v.insert(whole.v.end(), {0.0f, 0.0f});
+    std::vector<float> all = field;
+    all.insert(all.end(), residual.begin(), residual.end());
+    const std::string concatenated = test::scratch_dir() + "/concatenated.ckpt";
+    save_field_checkpoint(concatenated, all, whole, "extra");
+
+    CheckpointPieces pieces;
+    pieces.parameters = {{field.data(), field.size()}, {residual.data(), residual.size()}};
+    pieces.m = {{field_state.m.data(), 3}, {nullptr, 2}};
+    pieces.v = {{field_state.v.data(), 3}, {nullptr, 2}};
+    pieces.step = 12;
+    const std::string streamed = test::scratch_dir() + "/streamed.ckpt";
+    save_field_checkpoint(streamed, pieces, "extra");
+    EXPECT_EQ(read_text_file(streamed), read_text_file(concatenated));
+    const FieldCheckpoint loaded = load_field_checkpoint(streamed);
+    EXPECT_EQ(loaded.parameters, all);
+    EXPECT_TRUE(loaded.adam == whole);
+}
+
 TEST(Checkpoint, DamagedFilesAreRejectedWithTheirName) {
     std::vector<float> params(100, 0.5f);
     const std::string good = test::scratch_dir() + "/good.ckpt";

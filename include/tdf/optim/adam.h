@@ -23,8 +23,13 @@ struct AdamState {
     std::vector<float> v;
     std::int64_t step = 0;
 
-    /// Serializes to a self-describing little-endian binary blob (magic, version, sizes).
+    /// Serializes to a self-describing little-endian binary blob (magic, version, sizes), then
+    /// the moments m and v as float32.
     std::string to_bytes() const;
+    /// The blob's bytes before the moments, for writers that stream m and v from elsewhere.
+    static std::string blob_header(std::uint64_t parameter_count, std::int64_t step);
+    /// The size of to_bytes() for `parameter_count` moments.
+    static std::uint64_t blob_size(std::uint64_t parameter_count);
     /// Parses `to_bytes()` output; `what` names the source in errors. Throws tdf::Error on a
     /// wrong magic/version, truncated data or inconsistent sizes.
     static AdamState from_bytes(const std::string& bytes, const std::string& what);

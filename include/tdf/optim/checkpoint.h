@@ -19,9 +19,25 @@ struct FieldCheckpoint {
     std::string extra;  ///< opaque to this module
 };
 
+/// Consecutive floats owned elsewhere; `data == nullptr` stands for `size` zeros.
+struct FloatRange {
+    const float* data = nullptr;
+    std::size_t size = 0;
+};
+
+/// What a checkpoint holds, as pieces that are written one after the other (parameters, then
+/// the first moments, then the second), so that a trainer whose values live in several arrays
+/// never concatenates them: the file is streamed, and the peak memory of a run does not grow.
+struct CheckpointPieces {
+    std::vector<FloatRange> parameters, m, v;  ///< m and v add up to as many values as parameters
+    std::int64_t step = 0;                     ///< Adam's step count
+};
+
 /// Writes `path` atomically; throws tdf::Error when it cannot be written (disk full, ...).
 void save_field_checkpoint(const std::string& path, const std::vector<float>& parameters,
                            const AdamState& adam, const std::string& extra = {});
+/// The same file from pieces (byte-identical to the concatenated form).
+void save_field_checkpoint(const std::string& path, const CheckpointPieces& pieces, const std::string& extra = {});
 
 /// Reads a checkpoint; throws tdf::Error naming `path` when it is missing, not a checkpoint,
 /// of another version, truncated, or fails its checksum.

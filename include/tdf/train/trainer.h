@@ -19,6 +19,7 @@
 #include <tdf/field/texture_field.h>
 #include <tdf/guidance/guidance_backend.h>
 #include <tdf/optim/adam.h>
+#include <tdf/optim/checkpoint.h>
 #include <tdf/render/gbuffer.h>
 #include <tdf/render/material_sampling.h>
 #include <tdf/render/renderer.h>
@@ -123,6 +124,9 @@ public:
     /// finite (naming the term); the field is then left as it was before the step.
     LossRecord step();
     int iteration() const { return m_iteration; }
+    /// Frees the per-iteration buffers (views, hits, map gradients) once training is over, so
+    /// that exporting and evaluating do not add to their peak; the next step re-allocates them.
+    void release_training_buffers();
 
     /// Iteration `i`'s losses and their gradient with respect to parameters(), without changing
     /// anything (for finite-difference checks of the whole trainer). Guidance targets count as
@@ -139,6 +143,9 @@ public:
     std::vector<float> parameters() const;
     /// The optimizer state matching parameters() (moments concatenated the same way).
     AdamState optimizer_state() const;
+    /// parameters() and optimizer_state() as pieces of the arrays that hold them, for streaming
+    /// a checkpoint without copies (valid until the next step).
+    CheckpointPieces checkpoint_pieces() const;
     /// Restores a checkpoint taken after `iteration` iterations (parameters() / optimizer_state()).
     void restore(int iteration, const std::vector<float>& parameters, const AdamState& adam);
 
@@ -174,10 +181,17 @@ private:
     // The stages of one iteration, in order.
     LossRecord fit_maps(int i);  // texture evaluation, matching phase: dense fit, no rendering
     void sample_cameras(Rng& rng);
-    void trace_views();
+    /// Trace, surface, loss terms (and, texture evaluation, the scatter into the map gradients)
+    /// for the cameras [first, last): patches come first, then visual views.
+    void run_views(const Phase& phase, std::size_t first, std::size_t last, LossRecord& record);
+    void trace_views(std::size_t first, std::size_t last);
     void evaluate_surface(bool with_view_normals);
     void tactile_terms(const Phase& phase, LossRecord& record);
     void visual_terms(const Phase& phase, LossRecord& record);
+    void begin_map_gradients();
+    void scatter_map_gradients();
+    /// Lets the visual views reuse the patches' G-buffers and back (texture evaluation).
+    void swap_patch_and_view_buffers();
     void backward(int i);
     void update(int i);
     Phase phase_of(int i) const;
