@@ -157,7 +157,7 @@ Image interpolate_vertex_attribute(const TriangleMesh& mesh, const UvRaster& ras
 
 void sample_bilinear(const Image& image, Vec2f uv, float* out) {
     if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = Vec2f{0.0f, 0.0f};
-    sample_bilinear_uv(image, uv, Addressing::Clamp, out);
+    sample_bilinear_uv(image, uv.x, uv.y, Addressing::Clamp, out);
 }
 
 }  // namespace tdf

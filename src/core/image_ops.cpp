@@ -474,17 +474,50 @@ struct RowSummer {
     }
 };
 
-// The vertical pass shared by the blurs: row y of the result from the rows of `rows` (`row`
-// floats each, `height` of them) the kernel reads around y, `zero_row` where Border reads outside.
-template <class Kernel>
-void vertical_taps(const float* rows, std::size_t row, int height, int y, const Kernel& kernel, Addressing mode,
-                   const float* zero_row, std::vector<const float*>& sources) {
+// The horizontal pass of the separable filters: for each row y, fill(y, interior) writes the
+// row's `width` pixels (`stride` floats each) where the padded row keeps them, the margins are
+// padded as `mode` reads outside, and the kernel's taps are summed into row y of `out`
+// (width * stride floats per row).
+template <class Kernel, class FillRow>
+void horizontal_pass(int width, int height, std::size_t stride, const Kernel& kernel, Addressing mode,
+                     const FillRow& fill, float* out) {
     const int radius = int(kernel.size() / 2);
-    sources.resize(kernel.size());
-    for (int k = -radius; k <= radius; ++k) {
-        const int source = address(y + k, height, mode);
-        sources[std::size_t(k + radius)] = source < 0 ? zero_row : rows + std::size_t(source) * row;
-    }
+    const std::size_t row = std::size_t(width) * stride;
+    parallel_for(std::size_t(height), 8, [&](std::size_t y0, std::size_t y1) {
+        std::vector<float> padded(std::size_t(width + 2 * radius) * stride);
+        std::vector<const float*> sources(kernel.size());
+        for (std::size_t k = 0; k < kernel.size(); ++k) sources[k] = padded.data() + k * stride;
+        RowSummer sum;
+        for (std::size_t y = y0; y < y1; ++y) {
+            fill(int(y), padded.data() + std::size_t(radius) * stride);
+            pad_row(padded.data(), width, radius, stride, mode);
+            sum(sources.data(), kernel, row, out + y * row);
+        }
+    });
+}
+
+// The vertical pass: row y sums the rows of `rows` (`row` floats each, `height` of them) the
+// kernel reads around it, whole rows at a time (so it vectorises), into target(y, scratch) (a row
+// of the caller's, or `scratch`), then calls done(y, that row).
+template <class Kernel, class Target, class Done>
+void vertical_pass(const float* rows, std::size_t row, int height, const Kernel& kernel, Addressing mode,
+                   const Target& target, const Done& done) {
+    const int radius = int(kernel.size() / 2);
+    const std::vector<float> zero_row(mode == Addressing::Border ? row : 0, 0.0f);
+    parallel_for(std::size_t(height), 8, [&](std::size_t y0, std::size_t y1) {
+        std::vector<const float*> sources(kernel.size());
+        std::vector<float> scratch;
+        RowSummer sum;
+        for (int y = int(y0); y < int(y1); ++y) {
+            for (int k = -radius; k <= radius; ++k) {
+                const int source = address(y + k, height, mode);
+                sources[std::size_t(k + radius)] = source < 0 ? zero_row.data() : rows + std::size_t(source) * row;
+            }
+            float* dst = target(y, scratch);
+            sum(sources.data(), kernel, row, dst);
+            done(y, dst);
+        }
+    });
 }
 
 template <class Kernel>
@@ -493,39 +526,21 @@ void convolve_separable_impl(ConstImageView in, ImageView out, const Kernel& ker
     TDF_CHECK(in.width == out.width && in.height == out.height && in.channels == out.channels);
     const int w = in.width, h = in.height, c = in.channels;
     if (w == 0 || h == 0 || c == 0) return;
-    const int radius = int(kernel.size() / 2);
     const std::size_t row = std::size_t(w) * std::size_t(c);
     ScratchBuffer horizontal(row * std::size_t(h));
-    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
-        std::vector<float> padded(std::size_t(w + 2 * radius) * std::size_t(c));
-        std::vector<const float*> sources(kernel.size());
-        for (std::size_t k = 0; k < kernel.size(); ++k) sources[k] = padded.data() + k * std::size_t(c);
-        RowSummer sum;
-        for (std::size_t y = y0; y < y1; ++y) {
-            std::copy_n(in.row(int(y)), row, padded.data() + std::size_t(radius) * std::size_t(c));
-            pad_row(padded.data(), w, radius, std::size_t(c), mode);
-            sum(sources.data(), kernel, row, horizontal.data() + y * row);
-        }
-    });
-    const std::vector<float> zero_row(mode == Addressing::Border ? row : 0, 0.0f);
-    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
-        std::vector<const float*> sources;
-        RowSummer sum;
-        for (std::size_t y = y0; y < y1; ++y) {
-            vertical_taps(horizontal.data(), row, h, int(y), kernel, mode, zero_row.data(), sources);
-            sum(sources.data(), kernel, row, out.row(int(y)));
-        }
-    });
+    horizontal_pass(w, h, std::size_t(c), kernel, mode,
+                    [&](int y, float* interior) { std::copy_n(in.row(y), row, interior); }, horizontal.data());
+    vertical_pass(horizontal.data(), row, h, kernel, mode,
+                  [&](int y, std::vector<float>&) { return out.row(y); }, [](int, const float*) {});
 }
 
-// Row y of the mask-weighted image with clamped padding: per pixel m * value per channel, then m
-// (1 where `mask` is empty), for x in [-radius, width + radius).
-void weighted_padded_row(const Image& image, const Image& mask, int y, int radius, float* padded) {
+// Row y of the mask-weighted image into `dst`: per pixel m * value per channel, then m (1 where
+// `mask` is empty).
+void weighted_row(const Image& image, const Image& mask, int y, float* dst) {
     const int w = image.width(), c = image.channels();
     const std::size_t stride = std::size_t(c + 1);
     const float* src_row = image.pixel(0, y);
     const float* mask_row = mask.empty() ? nullptr : mask.pixel(0, y);
-    float* dst = padded + std::size_t(radius) * stride;
     if (c == 3 && mask_row) {  // the common case, written out so it compiles to straight-line code
         for (int x = 0; x < w; ++x, dst += 4) {
             const float m = mask_row[x];
@@ -540,7 +555,6 @@ void weighted_padded_row(const Image& image, const Image& mask, int y, int radiu
             dst[c] = m;
         }
     }
-    pad_row(padded, w, radius, stride, Addressing::Clamp);
 }
 
 // One output pixel of a horizontal pass: the taps of `kernel` over `src` (the padded row at the
@@ -581,36 +595,28 @@ Image gaussian_blur_masked(const Image& image, const Image& mask, float sigma) {
     const int w = image.width(), h = image.height(), c = image.channels();
     TDF_CHECK(mask.empty() || (mask.width() == w && mask.height() == h && mask.channels() == 1));
     const std::vector<float> kernel = masked_blur_kernel(sigma);
-    const int radius = int(kernel.size() / 2);
     const int stride = c + 1;  // weighted channels, then the weight
     const std::size_t row = std::size_t(w) * std::size_t(stride);
     // Horizontal pass over the weighted image, built row by row (no full-size weighted copy).
     ScratchBuffer horizontal(row * std::size_t(h));
-    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
-        std::vector<float> padded(std::size_t(w + 2 * radius) * std::size_t(stride));
-        std::vector<const float*> sources(kernel.size());
-        for (std::size_t k = 0; k < kernel.size(); ++k) sources[k] = padded.data() + k * std::size_t(stride);
-        for (std::size_t y = y0; y < y1; ++y) {
-            weighted_padded_row(image, mask, int(y), radius, padded.data());
-            weighted_sum(sources.data(), kernel.data(), kernel.size(), row, horizontal.data() + y * row);
-        }
-    });
-    // Vertical pass row by row (whole rows at a time, so it vectorises), then the division.
+    horizontal_pass(w, h, std::size_t(stride), kernel, Addressing::Clamp,
+                    [&](int y, float* interior) { weighted_row(image, mask, y, interior); }, horizontal.data());
+    // Vertical pass, then the division.
     Image out = image;
-    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
-        std::vector<float> sum(row);
-        std::vector<const float*> sources;
-        for (int y = int(y0); y < int(y1); ++y) {
-            vertical_taps(horizontal.data(), row, h, y, kernel, Addressing::Clamp, nullptr, sources);
-            weighted_sum(sources.data(), kernel.data(), kernel.size(), row, sum.data());
+    vertical_pass(
+        horizontal.data(), row, h, kernel, Addressing::Clamp,
+        [&](int, std::vector<float>& scratch) {
+            scratch.resize(row);
+            return scratch.data();
+        },
+        [&](int y, const float* sum) {
             for (int x = 0; x < w; ++x) {
-                const float* s = sum.data() + std::size_t(x) * std::size_t(stride);
+                const float* s = sum + std::size_t(x) * std::size_t(stride);
                 if (s[c] <= 0.0f) continue;
                 float* dst = out.pixel(x, y);
                 for (int ch = 0; ch < c; ++ch) dst[ch] = s[ch] / s[c];
             }
-        }
-    });
+        });
     return out;
 }
 
@@ -649,7 +655,8 @@ Image gaussian_blur_resized(const Image& image, const Image& mask, float sigma, 
         std::vector<float> padded(std::size_t(w + 2 * radius) * std::size_t(stride));
         for (std::size_t y = y0; y < y1; ++y) {
             if (!row_needed[y]) continue;
-            weighted_padded_row(image, mask, int(y), radius, padded.data());
+            weighted_row(image, mask, int(y), padded.data() + std::size_t(radius) * std::size_t(stride));
+            pad_row(padded.data(), w, radius, std::size_t(stride), Addressing::Clamp);
             for (std::size_t j = 0; j < cols.size(); ++j) {
                 float* dst = horizontal.data() + y * hrow + j * std::size_t(stride);
                 const float* src = padded.data() + std::size_t(cols[j]) * std::size_t(stride);

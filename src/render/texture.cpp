@@ -12,7 +12,7 @@ namespace {
 // The footprint of a lookup at uv: texel centres at (k + 0.5) / size, v up, wrap addressing (one
 // addressing for lookups and their taps).
 inline BilinearFootprint wrapped_footprint(const Image& img, Vec2f uv) {
-    const Vec2f t = uv_to_texel(uv, img.width(), img.height());
+    const TexelPoint t = uv_to_texel(uv.x, uv.y, img.width(), img.height());
     return bilinear_footprint(t.x, t.y, img.width(), img.height(), Addressing::Wrap);
 }
 }  // namespace

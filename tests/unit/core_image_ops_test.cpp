@@ -80,7 +80,7 @@ TEST(ImageOps, BilinearSamplingAtCentresIsExactInEveryMode) {
                 EXPECT_EQ(out[0], image.at(x, y, 0));
                 EXPECT_EQ(out[1], image.at(x, y, 1));
                 // The UV of the same centre.
-                sample_bilinear_uv(image, {(float(x) + 0.5f) / 5.f, 1.f - (float(y) + 0.5f) / 3.f}, mode, out);
+                sample_bilinear_uv(image, (float(x) + 0.5f) / 5.f, 1.f - (float(y) + 0.5f) / 3.f, mode, out);
                 EXPECT_NEAR(out[0], image.at(x, y, 0), 1e-4f);
             }
 }
@@ -112,7 +112,7 @@ TEST(ImageOps, BilinearSamplingOutsideFollowsTheAddressing) {
 }
 
 TEST(ImageOps, UvToTexelPutsCentresAtIntegers) {
-    const Vec2f t = uv_to_texel({0.5f / 8.f, 1.f - 2.5f / 4.f}, 8, 4);
+    const TexelPoint t = uv_to_texel(0.5f / 8.f, 1.f - 2.5f / 4.f, 8, 4);
     EXPECT_FLOAT_EQ(t.x, 0.0f);
     EXPECT_FLOAT_EQ(t.y, 2.0f);  // v up: row 0 is the top
 }

@@ -9,7 +9,6 @@
 /// Parallel loops write disjoint outputs or reduce in a fixed order, so every result is the
 /// same on any thread count.
 #include <tdf/core/image.h>
-#include <tdf/core/vec.h>
 
 #include <algorithm>
 #include <cmath>
@@ -84,9 +83,14 @@ struct ConstImageView {
 // ---------------------------------------------------------------------------------------------
 // Bilinear sampling at arbitrary points
 
-/// Texel coordinates of a UV (v up) on a width x height image: (u W - 0.5, (1 - v) H - 0.5).
-inline Vec2f uv_to_texel(Vec2f uv, int width, int height) {
-    return {uv.x * float(width) - 0.5f, (1.f - uv.y) * float(height) - 0.5f};
+/// A point in texel coordinates (pixel centres at integers).
+struct TexelPoint {
+    float x, y;
+};
+
+/// Texel coordinates of the UV (u, v) (v up) on a width x height image: (u W - 0.5, (1 - v) H - 0.5).
+inline TexelPoint uv_to_texel(float u, float v, int width, int height) {
+    return {u * float(width) - 0.5f, (1.f - v) * float(height) - 0.5f};
 }
 
 /// The four pixels a bilinear lookup blends (columns x0, x1, rows y0, y1; -1 = zero under
@@ -164,9 +168,9 @@ inline void sample_bilinear_texel(ConstImageView image, float x, float y, Addres
     blend_footprint(image, bilinear_footprint(x, y, image.width, image.height, mode), out);
 }
 
-/// Bilinear lookup at a UV (v up, texel centres at ((j + 0.5) / W, 1 - (i + 0.5) / H)).
-inline void sample_bilinear_uv(ConstImageView image, Vec2f uv, Addressing mode, float* out) {
-    const Vec2f t = uv_to_texel(uv, image.width, image.height);
+/// Bilinear lookup at the UV (u, v) (v up, texel centres at ((j + 0.5) / W, 1 - (i + 0.5) / H)).
+inline void sample_bilinear_uv(ConstImageView image, float u, float v, Addressing mode, float* out) {
+    const TexelPoint t = uv_to_texel(u, v, image.width, image.height);
     sample_bilinear_texel(image, t.x, t.y, mode, out);
 }
 
