@@ -12,39 +12,13 @@
 
 namespace tdf {
 
-namespace {
-
-// w00 p00 + w10 p10 + w01 p01 + w11 p11; C > 0 fixes the channel count at compile time for the
-// common cases (the renderer's inner loop).
-template <int C>
-inline void blend(const float* p00, const float* p10, const float* p01, const float* p11, float ax, float ay,
-                  int channels, float* out) {
-    const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
-    const int c = C > 0 ? C : channels;
-    for (int k = 0; k < c; ++k) out[k] = w00 * p00[k] + w10 * p10[k] + w01 * p01[k] + w11 * p11[k];
-}
-
-// What Border reads outside the image: zeros for up to 64 channels.
+namespace image_ops_detail {
 const float* zero_pixel(int channels) {
     static const std::array<float, 64> zeros{};
     TDF_CHECK_LE(channels, int(zeros.size()));
     return zeros.data();
 }
-
-}  // namespace
-
-void blend_footprint(ConstImageView image, const BilinearFootprint& f, float* out) {
-    const int c = image.channels;
-    const float* zero = (f.x0 | f.x1 | f.y0 | f.y1) < 0 ? zero_pixel(c) : nullptr;
-    const auto at = [&](int x, int y) { return x < 0 || y < 0 ? zero : image.pixel(x, y); };
-    const float *p00 = at(f.x0, f.y0), *p10 = at(f.x1, f.y0), *p01 = at(f.x0, f.y1), *p11 = at(f.x1, f.y1);
-    switch (c) {
-        case 3: blend<3>(p00, p10, p01, p11, f.ax, f.ay, c, out); break;
-        case 4: blend<4>(p00, p10, p01, p11, f.ax, f.ay, c, out); break;
-        case 1: blend<1>(p00, p10, p01, p11, f.ax, f.ay, c, out); break;
-        default: blend<0>(p00, p10, p01, p11, f.ax, f.ay, c, out); break;
-    }
-}
+}  // namespace image_ops_detail
 
 namespace {
 

@@ -41,7 +41,13 @@ MipTexture::MipTexture(const Image& image) {
 
 void MipTexture::sample_level(int level, Vec2f uv, float* out) const {
     const Image& img = m_levels[std::size_t(level)];
-    blend_footprint(img, wrapped_footprint(img, uv), out);
+    const BilinearFootprint f = wrapped_footprint(img, uv);
+    switch (img.channels()) {  // fixed channel counts for the common maps: the renderer's inner loop
+        case 3: blend_footprint<3>(img, f, out); break;
+        case 4: blend_footprint<4>(img, f, out); break;
+        case 1: blend_footprint<1>(img, f, out); break;
+        default: blend_footprint(img, f, out); break;
+    }
 }
 
 void MipTexture::sample_bilinear(Vec2f uv, float* out) const { sample_level(0, uv, out); }

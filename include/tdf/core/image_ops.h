@@ -158,9 +158,31 @@ inline BilinearFootprint bilinear_footprint(float x, float y, int width, int hei
     return f;
 }
 
+namespace image_ops_detail {
+// `channels` zeros: what Border reads outside the image (up to 64 channels).
+const float* zero_pixel(int channels);
+}  // namespace image_ops_detail
+
 /// Blends the footprint's four pixels of `image` into `out` (image.channels floats):
-/// w00 p00 + w10 p10 + w01 p01 + w11 p11 with w10 = ax (1 - ay) and so on.
-void blend_footprint(ConstImageView image, const BilinearFootprint& f, float* out);
+/// w00 p00 + w10 p10 + w01 p01 + w11 p11 with w10 = ax (1 - ay) and so on. `Channels` > 0 fixes
+/// the channel count at compile time (it must equal image.channels) for callers in hot loops
+/// that dispatch on it, like the texture pyramid.
+template <int Channels = 0>
+inline void blend_footprint(ConstImageView image, const BilinearFootprint& f, float* out) {
+    const int c = Channels > 0 ? Channels : image.channels;
+    const float *p00, *p10, *p01, *p11;
+    if ((f.x0 | f.x1 | f.y0 | f.y1) >= 0) {
+        p00 = image.pixel(f.x0, f.y0), p10 = image.pixel(f.x1, f.y0);
+        p01 = image.pixel(f.x0, f.y1), p11 = image.pixel(f.x1, f.y1);
+    } else {  // Border outside the image
+        const float* zero = image_ops_detail::zero_pixel(c);
+        const auto at = [&](int x, int y) { return x < 0 || y < 0 ? zero : image.pixel(x, y); };
+        p00 = at(f.x0, f.y0), p10 = at(f.x1, f.y0), p01 = at(f.x0, f.y1), p11 = at(f.x1, f.y1);
+    }
+    const float ax = f.ax, ay = f.ay;
+    const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+    for (int k = 0; k < c; ++k) out[k] = w00 * p00[k] + w10 * p10[k] + w01 * p01[k] + w11 * p11[k];
+}
 
 /// Bilinear lookup at texel coordinates (x, y) (centres at integers) under `mode` (Clamp, Wrap
 /// or Border); writes image.channels floats to `out`.
