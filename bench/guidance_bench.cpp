@@ -16,7 +16,7 @@
 #include <tdf/core/rng.h>
 #include <tdf/core/vec.h>
 #include <tdf/guidance/exemplar_patch_match.h>
-#include <tdf/guidance/image_filters.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/guidance/relief_shading.h>
 #include <tdf/tactile/tactile_map.h>
 
@@ -108,15 +108,9 @@ Vec3f rotate_about(Vec3f v, Vec3f axis, float angle) {
 
 /// Bilinear lookup of a tangent-space map at texel coordinates (wrapping, as a tiled map).
 Vec3f sample_wrapped(const Image& map, float u, float v) {
-    const int w = map.width(), h = map.height();
-    const float fx = u - std::floor(u / float(w)) * float(w), fy = v - std::floor(v / float(h)) * float(h);
-    const int x0 = int(fx) % w, y0 = int(fy) % h, x1 = (x0 + 1) % w, y1 = (y0 + 1) % h;
-    const float tx = fx - std::floor(fx), ty = fy - std::floor(fy);
-    Vec3f n;
-    for (int c = 0; c < 3; ++c)
-        n[c] = (map.at(x0, y0, c) * (1 - tx) + map.at(x1, y0, c) * tx) * (1 - ty) +
-               (map.at(x0, y1, c) * (1 - tx) + map.at(x1, y1, c) * tx) * ty;
-    return safe_normalize(n);
+    float n[3];
+    sample_bilinear_texel(map, u, v, Addressing::Wrap, n);
+    return safe_normalize(Vec3f(n[0], n[1], n[2]));
 }
 
 /// A tactile request like the optimizer's on the pebble sphere: each patch shows the map

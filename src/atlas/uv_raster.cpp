@@ -1,6 +1,7 @@
 #include <tdf/atlas/uv_metrics.h>
 #include <tdf/atlas/uv_raster.h>
 #include <tdf/core/error.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/core/parallel.h>
 
 #include <algorithm>
@@ -155,22 +156,8 @@ Image interpolate_vertex_attribute(const TriangleMesh& mesh, const UvRaster& ras
 }
 
 void sample_bilinear(const Image& image, Vec2f uv, float* out) {
-    const int w = image.width(), h = image.height(), channels = image.channels();
     if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = Vec2f{0.0f, 0.0f};
-    const float x = std::clamp(uv.x * float(w) - 0.5f, 0.0f, float(w - 1));
-    const float y = std::clamp((1.0f - uv.y) * float(h) - 0.5f, 0.0f, float(h - 1));
-    const int x0 = std::min(int(x), w - 1), y0 = std::min(int(y), h - 1);
-    const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
-    const float fx = x - float(x0), fy = y - float(y0);
-    const float* p00 = image.pixel(x0, y0);
-    const float* p10 = image.pixel(x1, y0);
-    const float* p01 = image.pixel(x0, y1);
-    const float* p11 = image.pixel(x1, y1);
-    for (int c = 0; c < channels; ++c) {
-        const float top = p00[c] + (p10[c] - p00[c]) * fx;
-        const float bottom = p01[c] + (p11[c] - p01[c]) * fx;
-        out[c] = top + (bottom - top) * fy;
-    }
+    sample_bilinear_uv(image, uv.x, uv.y, Addressing::Clamp, out);
 }
 
 }  // namespace tdf

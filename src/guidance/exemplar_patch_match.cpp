@@ -6,7 +6,7 @@
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
 #include <tdf/core/vec.h>
-#include <tdf/guidance/image_filters.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/io/image_io.h>
 
 #include <algorithm>
@@ -800,29 +800,26 @@ Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, st
     // Written over `detail` (each pixel reads only its own value first), which is the input on
     // the background already: no second full-size image.
     Image& out = detail;
-    const float sx = float(work_width) / float(width), sy = float(work_height) / float(height);
+    const BilinearResizeTaps tx = bilinear_resize_taps(work_width, width), ty = bilinear_resize_taps(work_height, height);
     parallel_for(std::size_t(height), row_grain, [&](std::size_t y0, std::size_t y1) {
         for (int y = int(y0); y < int(y1); ++y) {
-            const float fy = std::clamp((float(y) + 0.5f) * sy - 0.5f, 0.0f, float(work_height - 1));
-            const int iy = std::min(int(fy), work_height - 1);
-            const int iy1 = std::min(iy + 1, work_height - 1);
-            const float ty = fy - float(iy);
+            const std::size_t ys = std::size_t(y);
+            const int iy = ty.i0[ys], iy1 = ty.i1[ys];
+            const float wy = ty.w1[ys];
             for (int x = 0; x < width; ++x) {
                 const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
                 const float m = mask.data()[p];
                 if (m <= 0.0f) continue;
                 float r[3];
                 if (shrink) {
-                    const float fx = std::clamp((float(x) + 0.5f) * sx - 0.5f, 0.0f, float(work_width - 1));
-                    const int ix = std::min(int(fx), work_width - 1);
-                    const int ix1 = std::min(ix + 1, work_width - 1);
-                    const float tx = fx - float(ix);
+                    const int ix = tx.i0[std::size_t(x)], ix1 = tx.i1[std::size_t(x)];
+                    const float wx = tx.w1[std::size_t(x)];
                     const float* d = detail.data() + 3 * p;  // read before it is overwritten below
                     for (int ch = 0; ch < 3; ++ch) {
-                        const float top = refined.at(ix, iy, ch) * (1 - tx) + refined.at(ix1, iy, ch) * tx;
+                        const float top = refined.at(ix, iy, ch) * (1 - wx) + refined.at(ix1, iy, ch) * wx;
                         const float bottom =
-                            refined.at(ix, iy1, ch) * (1 - tx) + refined.at(ix1, iy1, ch) * tx;
-                        r[ch] = d[ch] + (top * (1 - ty) + bottom * ty);
+                            refined.at(ix, iy1, ch) * (1 - wx) + refined.at(ix1, iy1, ch) * wx;
+                        r[ch] = d[ch] + (top * (1 - wy) + bottom * wy);
                     }
                 } else {
                     std::copy_n(refined.data() + 3 * p, 3, r);

@@ -2,7 +2,7 @@
 
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
-#include <tdf/guidance/image_filters.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/guidance/schedule.h>
 
 #include <algorithm>

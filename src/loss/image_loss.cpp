@@ -1,4 +1,5 @@
 #include <tdf/core/error.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/loss/image_loss.h>
 
 #include <cmath>
@@ -145,54 +146,27 @@ constexpr int kSsimRadius = 5;  // 11 taps
 constexpr float kSsimSigma = 1.5f;
 constexpr double kC1 = 0.01 * 0.01, kC2 = 0.03 * 0.03;
 
-// Separable Gaussian blur of interleaved images, zero padding, same size. The kernel is
+// Separable Gaussian blur of interleaved images, zero padding (Border), same size. The kernel is
 // symmetric, so this zero-padded correlation is its own adjoint (used by the backward pass).
 class GaussianBlur {
 public:
-    explicit GaussianBlur(const ImageBatchShape& shape) : m_shape(shape), m_tmp(shape.values()) {
-        float sum = 0;
-        for (int k = -kSsimRadius; k <= kSsimRadius; ++k)
-            sum += m_taps[k + kSsimRadius] = std::exp(-float(k * k) / (2 * kSsimSigma * kSsimSigma));
-        for (float& t : m_taps) t /= sum;
-    }
+    explicit GaussianBlur(const ImageBatchShape& shape)
+        : m_shape(shape), m_taps(gaussian_kernel<float>(kSsimSigma, kSsimRadius)) {}
 
-    void operator()(const float* in, float* out) {
-        const int w = m_shape.width, h = m_shape.height, ch = m_shape.channels;
-        const std::size_t rows = std::size_t(m_shape.images) * std::size_t(h);
-        float* tmp = m_tmp.data();
-        parallel_for(rows, 16, [&](std::size_t r0, std::size_t r1) {
-            for (std::size_t r = r0; r < r1; ++r) {
-                const float* src = in + r * std::size_t(w) * std::size_t(ch);
-                float* dst = tmp + r * std::size_t(w) * std::size_t(ch);
-                for (int x = 0; x < w; ++x)
-                    for (int c = 0; c < ch; ++c) {
-                        float s = 0;
-                        for (int k = std::max(-kSsimRadius, -x); k <= std::min(kSsimRadius, w - 1 - x); ++k)
-                            s += m_taps[k + kSsimRadius] * src[(x + k) * ch + c];
-                        dst[x * ch + c] = s;
-                    }
-            }
-        });
-        const std::size_t row_values = std::size_t(w) * std::size_t(ch);
-        parallel_for(rows, 16, [&](std::size_t r0, std::size_t r1) {
-            for (std::size_t r = r0; r < r1; ++r) {
-                const int y = int(r % std::size_t(h));
-                const float* image = tmp + (r - std::size_t(y)) * row_values;
-                float* dst = out + r * row_values;
-                for (std::size_t v = 0; v < row_values; ++v) {
-                    float s = 0;
-                    for (int k = std::max(-kSsimRadius, -y); k <= std::min(kSsimRadius, h - 1 - y); ++k)
-                        s += m_taps[k + kSsimRadius] * image[std::size_t(y + k) * row_values + v];
-                    dst[v] = s;
-                }
-            }
-        });
+    void operator()(const float* in, float* out) const {
+        const std::size_t image_values = m_shape.pixels() * std::size_t(m_shape.channels);
+        for (int i = 0; i < m_shape.images; ++i)
+            convolve_separable(ConstImageView(in + std::size_t(i) * image_values, m_shape.width, m_shape.height,
+                                              m_shape.channels),
+                               ImageView(out + std::size_t(i) * image_values, m_shape.width, m_shape.height,
+                                         m_shape.channels),
+                               m_taps,
+                               Addressing::Border);
     }
 
 private:
     ImageBatchShape m_shape;
-    std::vector<float> m_tmp;
-    float m_taps[2 * kSsimRadius + 1] = {};
+    std::vector<float> m_taps;
 };
 
 }  // namespace

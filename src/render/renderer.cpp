@@ -3,7 +3,7 @@
 #include <tdf/render/material_sampling.h>
 #include <tdf/render/raster.h>
 #include <tdf/render/renderer.h>
-#include <tdf/render/resample.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/render/shading.h>
 #include <tdf/render/trace.h>
 #include <tdf/scene/view_sampler.h>
@@ -343,8 +343,8 @@ Frame Renderer::render_ssaa(const Camera& camera, float ssaa, const Light& light
     internal.width = ssaa_internal_resolution(camera.width, ssaa);
     internal.height = ssaa_internal_resolution(camera.height, ssaa);
     Frame frame = render(internal, light, passes);
-    for (Image& image : frame.images) image = downsample_bilinear(image, camera.width, camera.height);
-    frame.coverage = downsample_bilinear(frame.coverage, camera.width, camera.height);
+    for (Image& image : frame.images) image = resize_bilinear(image, camera.width, camera.height);
+    frame.coverage = resize_bilinear(frame.coverage, camera.width, camera.height);
     return frame;
 }
 

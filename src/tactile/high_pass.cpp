@@ -1,6 +1,7 @@
 #include <tdf/tactile/high_pass.h>
 
 #include <tdf/core/error.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/core/parallel.h>
 #include "fftw_plan_impl.h"
 
@@ -15,13 +16,6 @@ namespace {
 void subtract_minimum(Image& image) {
     const float lowest = *std::min_element(image.values().begin(), image.values().end());
     for (float& v : image.values()) v -= lowest;
-}
-
-// Reflect-101 index (OpenCV BORDER_DEFAULT): -1 -> 1, n -> n - 2.
-int reflect101(int i, int n) {
-    if (n == 1) return 0;
-    while (i < 0 || i >= n) i = i < 0 ? -i : 2 * (n - 1) - i;
-    return i;
 }
 
 // Signed frequency of FFT bin `b` of an axis of length n, as numpy's fftshift orders them:
@@ -75,31 +69,9 @@ Image high_pass_gaussian(const Image& height, float cutoff_mm, float mm_per_pixe
                     mm_per_pixel);
     const float sigma = 0.18739f * cutoff_mm / mm_per_pixel;  // sqrt(ln 2 / pi) / sqrt(2 pi)
     const int radius = std::max(1, int(std::ceil(3.0f * sigma)));
-    std::vector<float> kernel(std::size_t(2 * radius + 1));
-    float total = 0;
-    for (int i = -radius; i <= radius; ++i)
-        total += kernel[std::size_t(i + radius)] = std::exp(-0.5f * float(i * i) / (sigma * sigma));
-    for (float& k : kernel) k /= total;
-    const int w = height.width(), h = height.height();
-    Image rows(w, h, 1), blurred(w, h, 1);
-    parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
-        for (int y = int(y0); y < int(y1); ++y)
-            for (int x = 0; x < w; ++x) {
-                float sum = 0;
-                for (int i = -radius; i <= radius; ++i)
-                    sum += kernel[std::size_t(i + radius)] * height.at(reflect101(x + i, w), y, 0);
-                rows.at(x, y, 0) = sum;
-            }
-    });
-    parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
-        for (int y = int(y0); y < int(y1); ++y)
-            for (int x = 0; x < w; ++x) {
-                float sum = 0;
-                for (int i = -radius; i <= radius; ++i)
-                    sum += kernel[std::size_t(i + radius)] * rows.at(x, reflect101(y + i, h), 0);
-                blurred.at(x, y, 0) = height.at(x, y, 0) - sum;
-            }
-    });
+    Image blurred(height.width(), height.height(), 1);
+    convolve_separable(height, blurred, gaussian_kernel<float>(sigma, radius), Addressing::Mirror);
+    for (std::size_t i = 0; i < blurred.values().size(); ++i) blurred.values()[i] = height.values()[i] - blurred.values()[i];
     subtract_minimum(blurred);
     return blurred;
 }
@@ -132,7 +104,7 @@ Image bilateral_filter(const Image& image, int diameter, float sigma_color, floa
                 const float centre = image.at(x, y, 0);
                 float sum = 0, weights = 0;
                 for (const Tap& t : taps) {
-                    const float v = image.at(reflect101(x + t.dx, w), reflect101(y + t.dy, h), 0);
+                    const float v = image.at(address(x + t.dx, w, Addressing::Mirror), address(y + t.dy, h, Addressing::Mirror), 0);
                     const float weight = t.weight * std::exp((v - centre) * (v - centre) * color_scale);
                     sum += weight * v;
                     weights += weight;

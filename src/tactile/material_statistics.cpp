@@ -1,6 +1,7 @@
 #include <tdf/tactile/material_statistics.h>
 
 #include <tdf/core/error.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/core/parallel.h>
 
 #include <algorithm>
@@ -14,37 +15,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kTiltBins = 16;
 constexpr int kOrientationBins = 8;
 constexpr float kScaleSigmas[] = {1.0f, 2.0f, 4.0f, 8.0f};
-
-// numpy's "reflect" padding (reflect-101): ... c b | a b c | b a ...
-int reflect(int i, int n) {
-    if (n == 1) return 0;
-    const int period = 2 * (n - 1);
-    i = std::abs(i) % period;
-    return i >= n ? period - i : i;
-}
-
-// One separable pass along x (rows) or y (columns), every channel.
-Image convolve_axis(const Image& in, const std::vector<double>& kernel, bool along_x) {
-    const int w = in.width(), h = in.height(), ch = in.channels();
-    const int r = int(kernel.size() / 2);
-    Image out(w, h, ch);
-    parallel_for(std::size_t(h), 8, [&](std::size_t y0, std::size_t y1) {
-        std::vector<double> sum(static_cast<std::size_t>(ch));
-        for (int y = int(y0); y < int(y1); ++y)
-            for (int x = 0; x < w; ++x) {
-                std::fill(sum.begin(), sum.end(), 0.0);
-                for (int k = -r; k <= r; ++k) {
-                    const int sx = along_x ? reflect(x + k, w) : x, sy = along_x ? y : reflect(y + k, h);
-                    const float* p = in.pixel(sx, sy);
-                    const double weight = kernel[std::size_t(k + r)];
-                    for (int c = 0; c < ch; ++c) sum[std::size_t(c)] += weight * p[c];
-                }
-                float* o = out.pixel(x, y);
-                for (int c = 0; c < ch; ++c) o[c] = float(sum[std::size_t(c)]);
-            }
-    });
-    return out;
-}
 
 // Mean over a (2r+1)^2 window with edge-replicated borders (separable).
 Image box_mean_replicated(const Image& in, int r) {
@@ -95,13 +65,11 @@ void normalise(std::vector<double>& h) {
 
 Image gaussian_blur_mirrored(const Image& image, float sigma_px) {
     TDF_CHECK(sigma_px > 0.0f);
-    const int r = int(3.0f * sigma_px + 1.0f);
-    std::vector<double> kernel(std::size_t(2 * r + 1));
-    double total = 0;
-    for (int t = -r; t <= r; ++t)
-        total += kernel[std::size_t(t + r)] = std::exp(-double(t) * t / (2.0 * sigma_px * sigma_px));
-    for (double& k : kernel) k /= total;
-    return convolve_axis(convolve_axis(image, kernel, false), kernel, true);
+    // In double, as the yardstick (numpy) sums.
+    const std::vector<double> kernel = gaussian_kernel<double>(sigma_px, int(3.0f * sigma_px + 1.0f));
+    Image out(image.width(), image.height(), image.channels());
+    convolve_separable(image, out, kernel, Addressing::Mirror);
+    return out;
 }
 
 DetailSlopes detail_slopes(const Image& normals, float sigma_px) {

@@ -6,6 +6,7 @@
 #include <tdf/tactile/high_pass.h>
 #include <tdf/tactile/material_statistics.h>
 #include <tdf/tactile/normal_map.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/tactile/resample.h>
 
 #include <algorithm>

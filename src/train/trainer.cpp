@@ -12,7 +12,7 @@
 #include <tdf/loss/image_loss.h>
 #include <tdf/render/shading.h>
 #include <tdf/loss/tactile_loss.h>
-#include <tdf/render/resample.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/render/shading.h>
 #include <tdf/render/texture_gradient.h>
 #include <tdf/render/trace.h>
@@ -742,7 +742,7 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
                     std::copy(&c.x, &c.x + 3, b.internal.data() + 3 * p);
                 }
             });
-            copy_into(resized ? downsample_bilinear(b.internal, S, S) : b.internal, out);
+            copy_into(resized ? resize_bilinear(b.internal, S, S) : b.internal, out);
         };
         float* pred = b.albedo_pred.data() + std::size_t(k) * view_values;
         render_internal([&](std::size_t, std::size_t q) { return b.outputs[q].albedo; }, pred);
@@ -782,9 +782,9 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
                 std::copy(&s_v.x, &s_v.x + 3, surface_internal.data() + 3 * p);
                 mask_internal.data()[p] = 1.0f;
             }
-            controls.push_back(to_bae_control(resized ? downsample_bilinear(normals_internal, S, S) : normals_internal));
-            masks.push_back(resized ? downsample_bilinear(mask_internal, S, S) : mask_internal);
-            surfaces.push_back(resized ? downsample_bilinear(surface_internal, S, S) : surface_internal);
+            controls.push_back(to_bae_control(resized ? resize_bilinear(normals_internal, S, S) : normals_internal));
+            masks.push_back(resized ? resize_bilinear(mask_internal, S, S) : mask_internal);
+            surfaces.push_back(resized ? resize_bilinear(surface_internal, S, S) : surface_internal);
         }
     }
     const ImageBatchShape shape{B, S, S, 3};
@@ -850,7 +850,7 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
         const auto to_internal = [&](const std::vector<float>& grad) {
             Image out(S, S, 3);
             std::copy_n(grad.data() + std::size_t(k) * view_values, view_values, out.data());
-            return resized ? downsample_bilinear_adjoint(out, g.width, g.height) : out;
+            return resized ? resize_bilinear_adjoint(out, g.width, g.height) : out;
         };
         const Image albedo_grad = to_internal(b.albedo_grad);
         const Image lambertian_grad = visual_guidance ? to_internal(b.lambertian_grad) : Image();

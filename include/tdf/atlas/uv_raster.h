@@ -48,8 +48,9 @@ Image interpolate_vertex_attribute(const TriangleMesh& mesh, const UvRaster& ras
                                    const std::vector<Vec3f>& attribute, Vec3f background = {});
 
 /// Bilinear lookup of `image` at (u, v) in OBJ convention (v up), texel centres at
-/// ((j + 0.5) / width, 1 - (i + 0.5) / height), clamped to the edge texels (no wrap).
-/// Writes `image.channels()` values to `out`.
+/// ((j + 0.5) / width, 1 - (i + 0.5) / height), clamped to the edge texels (no wrap); a
+/// non-finite UV reads UV (0, 0). sample_bilinear_uv(image, uv, Addressing::Clamp, out) of
+/// core/image_ops.h. Writes `image.channels()` values to `out`.
 void sample_bilinear(const Image& image, Vec2f uv, float* out);
 
 }  // namespace tdf

@@ -6,6 +6,7 @@
 /// UVs are tdf's (OBJ convention, v up): texel coordinates are x = u W - 0.5 and
 /// y = (1 - v) H - 0.5, so v = 1 is the top row of the image (the reference's v' = 1 - v).
 #include <tdf/core/image.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/core/vec.h>
 
 #include <cstdint>
@@ -28,10 +29,9 @@ constexpr int kMaxTextureChannels = 16;
 class MipTexture {
 public:
     MipTexture() = default;
-    /// Builds the pyramid from `image` (any channel count, any size). Level k+1 has size
-    /// max(1, floor(size_k / 2)) per axis, each texel the area-weighted box average of the
-    /// level-k texels it covers: exactly the 2x2 box filter of spec 3.7 for even sizes, and a
-    /// footprint of 2 + 1/size_{k+1} texels (partial texels weighted by coverage) for odd sizes.
+    /// Builds the pyramid from `image` (any channel count, any size). Level k+1 is
+    /// downsample_box(level k): max(1, floor(size_k / 2)) per axis, each texel the area-weighted
+    /// box average of the level-k texels it covers (the 2x2 box filter of spec 3.7 for even sizes).
     explicit MipTexture(const Image& image);
 
     /// Rebuilds the pyramid from `image`, reusing the storage when the size and channel count are
@@ -69,13 +69,7 @@ private:
     std::vector<Image> m_levels;
 };
 
-/// One level of the pyramid from the previous one (exposed for tests).
-Image downsample_box(const Image& src);
-/// downsample_box() into `dst`, which must be zero-filled and sized
-/// max(1, w / 2) x max(1, h / 2) with src's channel count (adds to it).
-void downsample_box_into(const Image& src, Image& dst);
-/// The adjoint of downsample_box(): adds to `fine` the gradient that `coarse` (the gradient of
-/// downsample_box(fine)) sends back through the box weights.
-void downsample_box_adjoint(const Image& coarse, Image& fine);
+// Each level is downsample_box() of the previous one; the pyramid's gradient goes back through
+// downsample_box_adjoint() (both in core/image_ops.h).
 
 }  // namespace tdf
