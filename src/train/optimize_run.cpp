@@ -153,9 +153,8 @@ PartTraining prepare_part_training(const SceneDescription& description, const Tr
     input.where = where;
     PartTraining parts;
     parts.segmentation = segment_parts(description.parts, input);
-    parts.labels = dilate_labels(parts.segmentation.texel_part, size, gutter);
     parts.layers = lay_scene_part_maps(description.parts, mesh, size, where).layers;
-    parts.target = compose_part_target(parts.labels, size, parts.layers);
+    parts.target = compose_part_target(parts.segmentation.texel_part, size, parts.layers, kDefaultPartBand, gutter);
     return parts;
 }
 

@@ -13,7 +13,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <fstream>
 
 using namespace tdf;
 
@@ -31,7 +33,73 @@ RunConfig small_config(int iterations, int init_iterations, const std::string& e
                                 Json({{"evaluation", evaluation}}));
 }
 
+// The two-part sphere's scene with four parts: face_labels in four latitude bands (by the
+// face centroid's y), the two tactile maps alternating at repeats 2, 3, 4 and 5.
+SceneDescription four_part_description(const SceneDescription& two_parts, const TriangleMesh& mesh) {
+    const std::string file = test::scratch_dir() + "/four_part_sphere_labels.txt";
+    {
+        std::ofstream out(file);
+        const Bounds3 b = compute_bounds(mesh);
+        for (const Vec3i& t : mesh.triangles) {
+            const float y = (mesh.positions[std::size_t(t.x)].y + mesh.positions[std::size_t(t.y)].y +
+                             mesh.positions[std::size_t(t.z)].y) / 3.0f;
+            const int band = std::clamp(int(4.0f * (y - b.lower.y) / (b.upper.y - b.lower.y)), 0, 3) * 0 + int(4 * (&t - mesh.triangles.data()) / std::ptrdiff_t(mesh.triangles.size()));
+            out << "band" << band << "\n";
+        }
+    }
+    SceneDescription d = two_parts;
+    d.parts.source = PartsSourceSpec{};
+    d.parts.source.kind = "face_labels";
+    d.parts.source.file = file;
+    d.parts.parts.clear();
+    for (int k = 0; k < 4; ++k) {
+        PartSpec p = two_parts.parts.parts[std::size_t(k % 2)];
+        p.name = "band" + std::to_string(k);
+        p.select = {p.name};
+        p.layout.repeat = float(2 + k);
+        d.parts.parts.push_back(p);
+    }
+    return d;
+}
+
 }  // namespace
+
+TEST(TextureSpaceParts, FourPartProbe) {
+    const SceneDescription two = load_scene(kFolder + "scene.json");
+    const auto assets = load_scene_assets(two);
+    const SceneDescription description = four_part_description(two, assets->mesh);
+    for (int size : {256, 512}) {
+        const PartTraining parts = prepare_part_training(description, assets->mesh, assets->material, size, 8, "four");
+        const PartBoundaryMeasure m = measure_part_boundary(parts.target, parts.segmentation.texel_part, size, parts.layers);
+        std::printf("size %d: bleed %.2f step %.2f hard %.2f detail %.3f pairs %zu\n", size, m.bleed_texels,
+                    m.boundary_step_degrees, m.hard_step_degrees, m.band_detail_ratio, m.boundary_pairs);
+        {
+            const Image undilated = compose_part_target(parts.segmentation.texel_part, size, parts.layers);
+            const PartBoundaryMeasure u = measure_part_boundary(undilated, parts.segmentation.texel_part, size, parts.layers);
+            std::printf("  undilated compose: bleed %.2f step %.2f\n", u.bleed_texels, u.boundary_step_degrees);
+        }
+        RunConfig config = small_config(3, 2);
+        config.texture_size = size;
+        TrainingTarget target;
+        target.mesh = &assets->mesh;
+        target.scene = assets->scene.get();
+        target.material = &assets->material;
+        target.tactile_target_override = &parts.target;
+        target.texel_parts = &parts.segmentation.texel_part;
+        target.part_names = parts.segmentation.part_names;
+        Trainer trainer(target, config, 3);
+        trainer.set_guidance(nullptr, nullptr);
+        trainer.step();
+        trainer.step();
+        const BakedMaps maps = trainer.export_maps();
+        const PartBoundaryMeasure l = measure_part_boundary(maps.tactile_normal, parts.segmentation.texel_part, size, parts.layers);
+        std::printf("  learned: bleed %.2f step %.2f\n", l.bleed_texels, l.boundary_step_degrees);
+        const PartBoundaryMeasure t2 = measure_part_boundary(trainer.tactile_target(), parts.segmentation.texel_part, size, parts.layers);
+        std::printf("  trainer target: bleed %.2f step %.2f\n", t2.bleed_texels, t2.boundary_step_degrees);
+        const LossRecord r = trainer.step();
+        for (const auto& [k, v] : r.terms) std::printf("  %s %.4f\n", k.c_str(), v);
+    }
+}
 
 TEST(TextureSpaceParts, LabelsFidelityAndBoundaryOnTheTwoPartSphere) {
     const SceneDescription description = load_scene(kFolder + "scene.json");
