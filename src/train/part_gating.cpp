@@ -50,6 +50,41 @@ void PartGate::set_texel_part(std::vector<int> texel_part) {
     TDF_CHECK(texel_part.size() == std::size_t(m_size) * std::size_t(m_size));
     for (int l : texel_part) TDF_CHECK(l < part_count());
     m_texel_part = std::move(texel_part);
+    // Pure labels per level, over the texels each coarse texel's box filter reads (MipTexture:
+    // level k+1 has max(1, floor(size_k / 2)) texels per axis; odd sizes read a third row).
+    m_pure.assign(1, m_texel_part);
+    for (int side = m_size; side > 1;) {
+        const int next = std::max(1, side / 2);
+        const std::vector<int>& fine = m_pure.back();
+        std::vector<int> coarse(std::size_t(next) * std::size_t(next), -1);
+        for (int y = 0; y < next; ++y)
+            for (int x = 0; x < next; ++x) {
+                const int y0 = y * side / next, y1 = std::min(side, ((y + 1) * side + next - 1) / next);
+                const int x0 = x * side / next, x1 = std::min(side, ((x + 1) * side + next - 1) / next);
+                int part = fine[std::size_t(y0) * std::size_t(side) + std::size_t(x0)];
+                for (int v = y0; v < y1 && part >= 0; ++v)
+                    for (int u = x0; u < x1; ++u)
+                        if (fine[std::size_t(v) * std::size_t(side) + std::size_t(u)] != part) {
+                            part = -1;
+                            break;
+                        }
+                coarse[std::size_t(y) * std::size_t(next) + std::size_t(x)] = part;
+            }
+        m_pure.push_back(std::move(coarse));
+        side = next;
+    }
+}
+
+int PartGate::pure_part(const TrilinearTaps& taps) const {
+    int part = -1;
+    for (int i = 0; i < taps.count; ++i) {
+        if (!(taps.weight[i] > 0.0f)) continue;
+        TDF_CHECK(taps.level[i] >= 0 && std::size_t(taps.level[i]) < m_pure.size());
+        const int p = m_pure[std::size_t(taps.level[i])][taps.texel[i]];
+        if (p < 0 || (part >= 0 && p != part)) return -1;
+        part = p;
+    }
+    return part;
 }
 
 bool PartGate::has_guidance(float run_weight) const {
@@ -85,19 +120,30 @@ void PartGate::tactile_terms(const GatedPatches& patches, const GatedPhase& phas
     std::vector<Vec3f> refined;
     for (int k = 0; k < part_count(); ++k) {
         const PartGuidance& part = m_parts[std::size_t(k)];
-        std::size_t pixels = 0;
-        for (std::size_t p = 0; p < n; ++p) {
-            mask[p] = patches.part[p] == k ? 1.0f : 0.0f;
-            pixels += patches.part[p] == k;
-        }
-        // Part k's matching term, even when it has no pixels here (then 1, no gradient): the
+        const auto fill_mask = [&](const std::int16_t* part_of) {
+            std::size_t pixels = 0;
+            for (std::size_t p = 0; p < n; ++p) {
+                mask[p] = part_of[p] == k ? 1.0f : 0.0f;
+                pixels += part_of[p] == k;
+            }
+            return pixels;
+        };
+        std::size_t pixels = fill_mask(patches.part);
+        // The masked cosine terms count every pixel outside the mask as 1 - cos 0 (the reference's
+        // 1 - mean cos(M n, M t)); the gradient is the same without that constant, and the part's
+        // own share, sum over its pixels of (1 - cos) / all pixels, is what the log shows.
+        const double outside = double(n - pixels) / double(n);
+        // Part k's matching term, even when it has no pixels here (then 0, no gradient): the
         // loss log keeps the same terms every iteration.
         const float wm = matching_weight(k, phase.matching_weight);
         if (phase.matching_weight > 0 && wm > 0)
             record.terms["tactile_matching_" + part.name] =
-                wm * masked_cosine_loss(patches.pred, patches.target, mask.data(), n, patches.grad, wm);
+                wm * (masked_cosine_loss(patches.pred, patches.target, mask.data(), n, patches.grad, wm) - outside);
         const float wg = guidance_weight(k, phase.guidance_weight);
-        if (!phase.guidance || !part.backend || !(wg > 0) || pixels == 0) continue;
+        if (!phase.guidance || !part.backend || !(wg > 0)) continue;
+        pixels = fill_mask(patches.guidance_part);
+        if (pixels == 0) continue;
+        const double guidance_outside = double(n - pixels) / double(n);
         // Part k's request: only the patches holding its pixels, the others' refined images stay 0.
         GuidanceRequest request;
         request.kind = GuidanceKind::Tactile;
@@ -119,8 +165,10 @@ void PartGate::tactile_terms(const GatedPatches& patches, const GatedPhase& phas
         refined.assign(n, Vec3f{});
         for (std::size_t s = 0; s < sent.size(); ++s)
             std::copy_n(result.refined[s].data(), 3 * patch_pixels, &refined[std::size_t(sent[s]) * patch_pixels].x);
+        const double value =
+            masked_tactile_guidance_loss(phase.metric, patches.pred, refined.data(), mask.data(), n, patches.grad, wg);
         record.terms["tactile_guidance_" + part.name] =
-            wg * masked_tactile_guidance_loss(phase.metric, patches.pred, refined.data(), mask.data(), n, patches.grad, wg);
+            wg * (phase.metric == TactileGuidanceMetric::Cosine ? value - guidance_outside : value);
     }
 }
 

@@ -348,8 +348,13 @@ LossRecord Trainer::loss_and_gradient(int i) {
     if (texture_space()) prepare_maps();
     if (m_label_head) m_label_gradient.assign(m_label_head->parameters().size(), 0.0f);  // trained in matching only
     if (m_part_gate && m_gate_labels_stale) {
-        // The masks of the patch views: the head's parts at the texels, grown into the gutter.
-        m_part_gate->set_texel_part(dilate_labels(predicted_texel_parts(), m_config.texture_size, m_config.gutter));
+        // The masks of the patch views: the head's parts at the texels, and in the gutter the part
+        // of the texel each gutter texel copies (what a lookup there reads, where its gradient goes).
+        const std::vector<int> predicted = predicted_texel_parts();
+        std::vector<int> labels(predicted.size(), -1);
+        for (std::size_t t = 0; t < labels.size(); ++t)
+            if (m_atlas->source[t] >= 0) labels[t] = predicted[m_atlas->texels[std::size_t(m_atlas->source[t])]];
+        m_part_gate->set_texel_part(std::move(labels));
         m_gate_labels_stale = false;
     }
     const Phase phase = phase_of(i);
@@ -707,12 +712,20 @@ void Trainer::gated_tactile_terms(const Phase& phase, LossRecord& record) {
     PartGate& gate = *m_part_gate;
     const int P = cfg.patch_batch_size, R = cfg.patch_resolution;
     const std::size_t patch_pixels = std::size_t(R) * std::size_t(R);
-    std::vector<std::int16_t> pixel_part(b.patch_pred.size(), -1);
+    std::vector<std::int16_t> pixel_part(b.patch_pred.size(), -1), guidance_part(b.patch_pred.size(), -1);
     for (int k = 0; k < P; ++k) {
         const std::vector<int>& point_of = b.point_of[std::size_t(k)];
-        for (std::size_t p = 0; p < patch_pixels; ++p)
-            if (point_of[p] >= 0)
-                pixel_part[std::size_t(k) * patch_pixels + p] = std::int16_t(gate.part_at(b.lookup_uv[std::size_t(point_of[p])]));
+        parallel_for(patch_pixels, kPixelGrain, [&](std::size_t begin, std::size_t end) {
+            TrilinearTaps taps;
+            for (std::size_t p = begin; p < end; ++p) {
+                const int q = point_of[p];
+                if (q < 0) continue;
+                const std::size_t i = std::size_t(k) * patch_pixels + p;
+                pixel_part[i] = std::int16_t(gate.part_at(b.lookup_uv[std::size_t(q)]));
+                m_maps->normal().taps(b.lookup_uv[std::size_t(q)], b.lookup_lod[std::size_t(q)], -1, taps);
+                guidance_part[i] = std::int16_t(gate.pure_part(taps));
+            }
+        });
     }
     GatedPatches patches;
     patches.patches = P;
@@ -720,6 +733,7 @@ void Trainer::gated_tactile_terms(const Phase& phase, LossRecord& record) {
     patches.pred = b.patch_pred.data();
     patches.target = b.patch_target.data();
     patches.part = pixel_part.data();
+    patches.guidance_part = guidance_part.data();
     patches.grad = b.patch_grad.data();
     patches.add_patch = [&](GuidanceRequest& request, int k, const float* mask) {
         add_patch_to_request(request, b.gbuffers[std::size_t(k)], b.cameras[std::size_t(k)],
@@ -744,18 +758,18 @@ void Trainer::gated_tactile_terms(const Phase& phase, LossRecord& record) {
     // Jacobi denominators as the ungated terms', with each pixel's part's weights.
     const double pixels = double(P) * double(patch_pixels);
     const double guidance_curvature = cfg.tactile_guidance_loss == TactileGuidanceLoss::Cosine ? 1.0 : 2.0 / 3.0;
-    std::vector<float> kappa(std::size_t(gate.part_count()));
-    for (int k = 0; k < gate.part_count(); ++k) {
-        double c = phase.tactile_weight > 0 ? double(gate.matching_weight(k, phase.tactile_weight)) / pixels : 0.0;
-        if (gated.guidance && gate.part(k).backend)
-            c += double(gate.guidance_weight(k, cfg.weights.tactile_guidance)) / pixels * guidance_curvature;
-        kappa[std::size_t(k)] = float(c);
-    }
+    const auto kappa = [&](int matching, int guiding) {
+        double c = 0;
+        if (matching >= 0 && phase.tactile_weight > 0) c += double(gate.matching_weight(matching, phase.tactile_weight)) / pixels;
+        if (guiding >= 0 && gated.guidance && gate.part(guiding).backend)
+            c += double(gate.guidance_weight(guiding, cfg.weights.tactile_guidance)) / pixels * guidance_curvature;
+        return float(c);
+    };
     for (int k = 0; k < P; ++k) {
         const std::vector<int>& point_of = b.point_of[std::size_t(k)];
         for (std::size_t p = 0; p < patch_pixels; ++p) {
-            const int part = pixel_part[std::size_t(k) * patch_pixels + p];
-            if (point_of[p] >= 0) b.curvature[std::size_t(point_of[p])] = part >= 0 ? kappa[std::size_t(part)] : 0.0f;
+            const std::size_t i = std::size_t(k) * patch_pixels + p;
+            if (point_of[p] >= 0) b.curvature[std::size_t(point_of[p])] = kappa(pixel_part[i], guidance_part[i]);
         }
     }
 }

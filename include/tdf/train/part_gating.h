@@ -4,8 +4,16 @@
 /// atlas texel its lookup lands on; part k's tactile matching and tactile guidance terms see only
 /// its own pixels (the reference's M_k n_hat, M_k target), with part k's own weights, prompt and
 /// guidance backend (whose exemplars are part k's tactile maps). One normal map holds all parts.
+///
+/// Two masks per pixel. Matching: the part of the texel the lookup lands on (its target, the
+/// composed one, already blends the boundary). Guidance: the part only when EVERY texel the
+/// pixel's filtered lookup reads (bilinear at level 0, trilinear further away) is that part's,
+/// else none: a refined target of one material then never reaches the other's texels through
+/// the lookup's adjoint (with the plain mask, a tilted part-1 target moved other parts' texels up
+/// to 5 texels away at grazing patch angles; with this one no farther than the boundary band).
 #include <tdf/core/config.h>
 #include <tdf/core/vec.h>
+#include <tdf/render/texture.h>
 #include <tdf/guidance/guidance_backend.h>
 #include <tdf/loss/tactile_loss.h>
 #include <tdf/train/loss_log.h>
@@ -44,7 +52,8 @@ struct GatedPatches {
     int patches = 0, resolution = 0;
     const Vec3f* pred = nullptr;     ///< rendered view-space normals (0 off the surface)
     const Vec3f* target = nullptr;   ///< matching targets (the composed tactile target)
-    const std::int16_t* part = nullptr;  ///< per pixel the part, -1 off the surface
+    const std::int16_t* part = nullptr;  ///< per pixel the matching part (part_at), -1 off the surface
+    const std::int16_t* guidance_part = nullptr;  ///< per pixel the guidance part (pure_part), -1 = none
     Vec3f* grad = nullptr;           ///< dL/d(pred), accumulated into
     /// Appends patch k's guidance images to `request` with coverage x `mask` (R x R values) as
     /// its mask (the trainer's frames and surface data).
@@ -67,8 +76,8 @@ public:
     /// Gates over a size x size atlas; one PartGuidance per part (>= 2). No labels yet.
     PartGate(int size, std::vector<PartGuidance> parts);
 
-    /// The labels the masks come from: size x size (i * size + j, -1 = none), grown into the
-    /// gutter so lookups near chart borders keep their part.
+    /// The labels the masks come from: size x size (i * size + j, -1 = none), gutter texels
+    /// labelled with the part of the texel they copy (TexelAtlas::source).
     void set_texel_part(std::vector<int> texel_part);
     bool has_labels() const { return !m_texel_part.empty(); }
     /// Replaces the parts' settings and backends (same count).
@@ -84,6 +93,11 @@ public:
     /// mask of the reference's argmax), -1 outside any part.
     int part_at(Vec2f uv) const;
 
+    /// The part whose texels hold every tap of `taps` (a lookup into a texture of the atlas's size,
+    /// weights > 0), -1 when the taps read texels of two parts or of none. Coarser levels count a
+    /// texel as a part's only when all level-0 texels under it are.
+    int pure_part(const TrilinearTaps& taps) const;
+
     /// Part k's tactile matching weight / guidance weight given the run's.
     float matching_weight(int k, float run_weight) const;
     float guidance_weight(int k, float run_weight) const;
@@ -96,6 +110,7 @@ public:
 
 private:
     std::vector<int> m_texel_part;
+    std::vector<std::vector<int>> m_pure;  // per mip level (MipTexture sizes): the part, -1 = mixed or none
     int m_size;
     std::vector<PartGuidance> m_parts;
 };
