@@ -11,6 +11,7 @@
 #include <tdf/train/part_gating.h>
 #include <tdf/train/trainer.h>
 
+#include "common/spot_truth.h"
 #include "common/test_paths.h"
 
 #include <gtest/gtest.h>
@@ -307,6 +308,45 @@ TEST(TextureSpaceParts, LabelsFidelityAndBoundaryOnTheTwoPartSphere) {
     EXPECT_GT(boundary.boundary_pairs, 0u);
 }
 
+TEST(TextureSpaceParts, LabelHeadLearnsTheSpotPartsOnTheRealMesh) {
+    // scenes/spot_parts: colour segmentation of the cow (K = 6, cluster 3 = dark patches); the
+    // head's prediction against that segmentation (its training labels) and against the
+    // independent rule of PartSegmentation.SpotPatchesFromColourOnTheRealMesh (L* < 36).
+    TDF_REQUIRE_SHARED_DATA("meshes/spot/spot_triangulated.obj");
+    const std::string scene = test::source_dir() + "/scenes/spot_parts/scene.json";
+    const SceneDescription description = load_scene(scene);
+    const auto assets = load_scene_assets(description);
+    const RunConfig config = small_config(60, 60);
+    const PartTraining parts =
+        prepare_part_training(description, assets->mesh, assets->material, 256, config.gutter, scene + ": parts");
+    TrainingTarget target;
+    target.mesh = &assets->mesh;
+    target.scene = assets->scene.get();
+    target.material = &assets->material;
+    target.tactile_target_override = &parts.target;
+    target.texel_parts = &parts.segmentation.texel_part;
+    target.part_names = parts.segmentation.part_names;
+    Trainer trainer(target, config, 3);
+    trainer.set_guidance(nullptr, nullptr);
+    while (trainer.iteration() < config.iterations) trainer.step();
+    const std::vector<int> predicted = trainer.predicted_texel_parts();
+    const std::vector<int>& seg = parts.segmentation.texel_part;
+    const std::vector<int> dark = test::spot_dark_patches(assets->mesh, assets->material, 256);
+    std::size_t right = 0, dark_right = 0, labelled = 0, dark_labelled = 0;
+    for (std::size_t t = 0; t < seg.size(); ++t) {
+        if (seg[t] >= 0) ++labelled, right += predicted[t] == seg[t];
+        if (dark[t] >= 0 && predicted[t] >= 0) ++dark_labelled, dark_right += predicted[t] == dark[t];
+    }
+    const double accuracy = double(right) / double(labelled);
+    const double truth_accuracy = double(dark_right) / double(dark_labelled);
+    std::printf("spot_parts, 256 texels, 60 matching iterations: the head agrees with the segmentation on %.4f of %zu "
+                "texels and with the L* < 36 rule on %.4f of %zu\n", accuracy, labelled, truth_accuracy, dark_labelled);
+    EXPECT_GE(truth_accuracy, 0.98);
+    EXPECT_GE(accuracy, 0.98);
+    const PartBoundaryMeasure m = measure_part_boundary(trainer.export_maps().tactile_normal, seg, 256, parts.layers);
+    EXPECT_LE(m.bleed_texels, 2.0);
+}
+
 TEST(TextureSpaceParts, PixelEvaluationWithPartsIsRefusedInOneLine) {
     const SceneDescription description = load_scene(kFolder + "scene.json");
     const auto assets = load_scene_assets(description);
@@ -327,5 +367,29 @@ TEST(TextureSpaceParts, PixelEvaluationWithPartsIsRefusedInOneLine) {
         const std::string message = e.what();
         EXPECT_NE(message.find("field.evaluation=texture"), std::string::npos) << message;
         EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+}
+
+TEST(TextureSpaceParts, PartGuidanceSettingsAndTheirErrors) {
+    const PartGuidanceSettings s = PartGuidanceSettings::from_json(
+        Json{{"backend", "none"}, {"weight", 0.2}, {"matching_weight", 0.0}, {"strength", 0.5}, {"config", Json::object()}},
+        "s.json: parts.list[1].guidance");
+    EXPECT_EQ(s.backend, "none");
+    EXPECT_FLOAT_EQ(s.guidance_weight, 0.2f);
+    EXPECT_FLOAT_EQ(s.matching_weight, 0.0f);
+    EXPECT_DOUBLE_EQ(s.strength, 0.5);
+    EXPECT_TRUE(s.backend_config.is_object());
+    const PartGuidanceSettings defaults = PartGuidanceSettings::from_json(Json::object(), "x");
+    EXPECT_TRUE(defaults.backend.empty());
+    EXPECT_LT(defaults.guidance_weight, 0.0f);  // the run's
+    for (const Json& bad : {Json{{"wieght", 1}}, Json{{"weight", -1}}, Json{{"strength", 2}}, Json{{"config", 3}}}) {
+        try {
+            PartGuidanceSettings::from_json(bad, "s.json: parts.list[1].guidance");
+            ADD_FAILURE() << bad.dump() << " was accepted";
+        } catch (const Error& e) {
+            const std::string message = e.what();
+            EXPECT_NE(message.find("parts.list[1].guidance"), std::string::npos) << message;
+            EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+        }
     }
 }
