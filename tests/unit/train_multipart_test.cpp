@@ -11,6 +11,7 @@
 #include <tdf/train/part_gating.h>
 #include <tdf/train/trainer.h>
 
+#include "common/four_part_sphere.h"
 #include "common/spot_truth.h"
 #include "common/test_paths.h"
 
@@ -20,7 +21,6 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <fstream>
 
 using namespace tdf;
 
@@ -36,33 +36,6 @@ RunConfig small_config(int iterations, int init_iterations, const std::string& e
                            {"held_out_patches", 2}};
     return RunConfig::from_json(optimize, Json(), Json({{"texture_size", 256}}), Json(), "test",
                                 Json({{"evaluation", evaluation}}));
-}
-
-// The two-part sphere's scene with four parts: face_labels in four bands of the OBJ's face
-// order (the configuration that measured a 2.83-texel bleed before the blend ignored the gutter:
-// its bands end along chart borders), the two tactile maps alternating at repeats 2, 3, 4, 5.
-SceneDescription four_part_description(const SceneDescription& two_parts, const TriangleMesh& mesh) {
-    const std::string file = test::scratch_dir() + "/four_part_sphere_labels.txt";
-    {
-        std::ofstream out(file);
-        for (const Vec3i& t : mesh.triangles) {
-            const int band = int(4 * (&t - mesh.triangles.data()) / std::ptrdiff_t(mesh.triangles.size()));
-            out << "band" << band << "\n";
-        }
-    }
-    SceneDescription d = two_parts;
-    d.parts.source = PartsSourceSpec{};
-    d.parts.source.kind = "face_labels";
-    d.parts.source.file = file;
-    d.parts.parts.clear();
-    for (int k = 0; k < 4; ++k) {
-        PartSpec p = two_parts.parts.parts[std::size_t(k % 2)];
-        p.name = "band" + std::to_string(k);
-        p.select = {p.name};
-        p.layout.repeat = float(2 + k);
-        d.parts.parts.push_back(p);
-    }
-    return d;
 }
 
 // A tactile guidance backend for the gating test: wherever its mask is positive it asks for one
@@ -117,7 +90,8 @@ double angle_degrees(const Image& a, const Image& b, std::size_t t) {
 TEST(TextureSpaceParts, FourPartsLabelsBoundariesAndGatedGuidance) {
     const SceneDescription two = load_scene(kFolder + "scene.json");
     const auto assets = load_scene_assets(two);
-    const SceneDescription description = four_part_description(two, assets->mesh);
+    const SceneDescription description =
+        test::four_part_sphere(two, assets->mesh, test::scratch_dir() + "/four_part_sphere_labels.txt");
     const int size = 256;
     const RunConfig config = small_config(66, 60);  // tactile guidance at iterations 61-65
     const PartTraining parts =
