@@ -85,6 +85,18 @@ double angle_degrees(const Image& a, const Image& b, std::size_t t) {
     return std::acos(std::clamp(double(dot(na, nb)), -1.0, 1.0)) * 180.0 / 3.14159265358979;
 }
 
+// What run_optimize gives the trainer for a multi-part scene.
+TrainingTarget part_target(const SceneAssets& assets, const PartTraining& parts) {
+    TrainingTarget target;
+    target.mesh = &assets.mesh;
+    target.scene = assets.scene.get();
+    target.material = &assets.material;
+    target.tactile_target_override = &parts.target;
+    target.texel_parts = &parts.segmentation.texel_part;
+    target.part_names = parts.segmentation.part_names;
+    return target;
+}
+
 }  // namespace
 
 TEST(TextureSpaceParts, FourPartsLabelsBoundariesAndGatedGuidance) {
@@ -97,13 +109,7 @@ TEST(TextureSpaceParts, FourPartsLabelsBoundariesAndGatedGuidance) {
     const PartTraining parts =
         prepare_part_training(description, assets->mesh, assets->material, size, config.gutter, "four parts");
     const std::vector<int>& truth = parts.segmentation.texel_part;  // face_labels: the ground truth
-    TrainingTarget target;
-    target.mesh = &assets->mesh;
-    target.scene = assets->scene.get();
-    target.material = &assets->material;
-    target.tactile_target_override = &parts.target;
-    target.texel_parts = &truth;
-    target.part_names = parts.segmentation.part_names;
+    const TrainingTarget target = part_target(*assets, parts);
     Trainer trainer(target, config, 3);
     trainer.set_guidance(nullptr, nullptr);
     while (trainer.iteration() < config.init_iterations) trainer.step();
@@ -216,13 +222,7 @@ TEST(TextureSpaceParts, LabelsFidelityAndBoundaryOnTheTwoPartSphere) {
     const RunConfig config = small_config(60, 60);
     const PartTraining parts = prepare_part_training(description, assets->mesh, assets->material, 256,
                                                      config.gutter, "two_part_sphere: parts");
-    TrainingTarget target;
-    target.mesh = &assets->mesh;
-    target.scene = assets->scene.get();
-    target.material = &assets->material;
-    target.tactile_target_override = &parts.target;
-    target.texel_parts = &parts.segmentation.texel_part;
-    target.part_names = parts.segmentation.part_names;
+    const TrainingTarget target = part_target(*assets, parts);
     Trainer trainer(target, config, 3);
     trainer.set_guidance(nullptr, nullptr);
     ASSERT_TRUE(trainer.trains_labels());
@@ -293,13 +293,7 @@ TEST(TextureSpaceParts, LabelHeadLearnsTheSpotPartsOnTheRealMesh) {
     const RunConfig config = small_config(60, 60);
     const PartTraining parts =
         prepare_part_training(description, assets->mesh, assets->material, 256, config.gutter, scene + ": parts");
-    TrainingTarget target;
-    target.mesh = &assets->mesh;
-    target.scene = assets->scene.get();
-    target.material = &assets->material;
-    target.tactile_target_override = &parts.target;
-    target.texel_parts = &parts.segmentation.texel_part;
-    target.part_names = parts.segmentation.part_names;
+    const TrainingTarget target = part_target(*assets, parts);
     Trainer trainer(target, config, 3);
     trainer.set_guidance(nullptr, nullptr);
     while (trainer.iteration() < config.iterations) trainer.step();
@@ -327,13 +321,7 @@ TEST(TextureSpaceParts, PixelEvaluationWithPartsIsRefusedInOneLine) {
     const RunConfig config = small_config(2, 1, "pixel");
     const PartTraining parts = prepare_part_training(description, assets->mesh, assets->material, 256,
                                                      config.gutter, "two_part_sphere: parts");
-    TrainingTarget target;
-    target.mesh = &assets->mesh;
-    target.scene = assets->scene.get();
-    target.material = &assets->material;
-    target.tactile_target_override = &parts.target;
-    target.texel_parts = &parts.segmentation.texel_part;
-    target.part_names = parts.segmentation.part_names;
+    const TrainingTarget target = part_target(*assets, parts);
     try {
         Trainer trainer(target, config, 3);
         FAIL() << "pixel evaluation with parts was accepted";
