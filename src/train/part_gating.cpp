@@ -138,7 +138,8 @@ void PartGate::tactile_terms(const GatedPatches& patches, const GatedPhase& phas
         const float wm = matching_weight(k, phase.matching_weight);
         if (phase.matching_weight > 0 && wm > 0)
             record.terms["tactile_matching_" + part.name] =
-                wm * (masked_cosine_loss(patches.pred, patches.target, mask.data(), n, patches.grad, wm) - outside);
+                wm * std::max(0.0, masked_cosine_loss(patches.pred, patches.target, mask.data(), n, patches.grad, wm) -
+                                       outside);  // >= 0: the difference only rounds below
         const float wg = guidance_weight(k, phase.guidance_weight);
         if (!phase.guidance || !part.backend || !(wg > 0)) continue;
         pixels = fill_mask(patches.guidance_part);
@@ -168,7 +169,7 @@ void PartGate::tactile_terms(const GatedPatches& patches, const GatedPhase& phas
         const double value =
             masked_tactile_guidance_loss(phase.metric, patches.pred, refined.data(), mask.data(), n, patches.grad, wg);
         record.terms["tactile_guidance_" + part.name] =
-            wg * (phase.metric == TactileGuidanceMetric::Cosine ? value - guidance_outside : value);
+            wg * (phase.metric == TactileGuidanceMetric::Cosine ? std::max(0.0, value - guidance_outside) : value);
     }
 }
 
