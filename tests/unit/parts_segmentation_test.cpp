@@ -57,11 +57,14 @@ double texel_accuracy(const std::vector<int>& got, const std::vector<int>& want)
     return total ? double(right) / double(total) : 0.0;
 }
 
+// The error segment_parts throws, which must be one line (README "Errors").
 std::string error_of(const PartsSpec& spec, const PartSegmentationInput& in) {
     try {
         segment_parts(spec, in);
     } catch (const Error& e) {
-        return e.what();
+        const std::string message = e.what();
+        EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+        return message;
     }
     return "(no error)";
 }
