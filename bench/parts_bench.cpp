@@ -4,12 +4,23 @@
 // segment/<scene>/<source>: segment_parts alone (the mesh and albedo are loaded once, outside
 // the timing). compose/<n>_parts: laying n tactile maps over the atlas and composing the target
 // over a two_part_sphere segmentation relabelled into n bands (the composition cost of parts).
+// refine/<n>_parts: one refinement iteration of the texture-space optimizer on two_part_sphere at
+// 512^2 (`tdf optimize` defaults otherwise: cameras, visual relief_shading guidance, tactile
+// exemplar_patch_match guidance) with 1 part (the scene without `parts`), the scene's 2 parts,
+// and 4 parts (tests/common/four_part_sphere.h); each part has its own tactile backend with its
+// own map as exemplar, gated by its mask. The 20 matching iterations and one refinement
+// iteration run before the timing.
 // CPU time of the process is reported (the machine is shared); wall time is noisy.
 #include <tdf/core/error.h>
 #include <tdf/parts/part_segmentation.h>
 #include <tdf/parts/part_target.h>
 #include <tdf/render/scene_assets.h>
 #include <tdf/tactile/tactile_map.h>
+#include <tdf/train/optimize_run.h>
+#include <tdf/train/part_gating.h>
+#include <tdf/train/trainer.h>
+
+#include "common/four_part_sphere.h"
 
 #include <benchmark/benchmark.h>
 
@@ -52,6 +63,54 @@ void register_segment(const std::string& name, const std::shared_ptr<Loaded>& l,
         ->Unit(benchmark::kMillisecond)
         ->MeasureProcessCPUTime()
         ->Iterations(1);
+}
+
+// A trainer on a scene with n parts, past matching and one refinement iteration.
+struct Refinement {
+    SceneDescription description;
+    std::unique_ptr<SceneAssets> assets;
+    std::unique_ptr<PartTraining> parts;
+    TrainingTarget target;
+    std::unique_ptr<Trainer> trainer;
+};
+
+std::unique_ptr<GuidanceBackend> exemplar_backend(const std::string& tactile_image) {
+    auto b = GuidanceBackend::create("exemplar_patch_match", Json::object());
+    b->set_exemplars({load_tactile_map(tactile_image).normals});
+    return b;
+}
+
+std::shared_ptr<Refinement> refinement(const std::string& scene, int parts) {
+    auto r = std::make_shared<Refinement>();
+    const SceneDescription two = load_scene(scene);
+    r->assets = load_scene_assets(two);
+    r->description = parts == 4 ? test::four_part_sphere(two, r->assets->mesh, (std::filesystem::temp_directory_path() / "tdf_four_part_sphere_labels.txt").string()) : two;
+    const RunConfig config = RunConfig::from_json(Json{{"iterations", 40}, {"init_iterations", 20}}, Json(),
+                                                  Json{{"texture_size", 512}}, Json(), scene);
+    r->target.mesh = &r->assets->mesh;
+    r->target.scene = r->assets->scene.get();
+    r->target.material = &r->assets->material;
+    if (parts > 1) {
+        r->parts = std::make_unique<PartTraining>(prepare_part_training(
+            r->description, r->assets->mesh, r->assets->material, config.texture_size, config.gutter, scene));
+        r->target.tactile_target_override = &r->parts->target;
+        r->target.texel_parts = &r->parts->segmentation.texel_part;
+        r->target.part_names = r->parts->segmentation.part_names;
+    }
+    r->trainer = std::make_unique<Trainer>(r->target, config, 0);
+    r->trainer->set_guidance(GuidanceBackend::create("relief_shading", Json::object()),
+                             parts > 1 ? nullptr : exemplar_backend(two.tactile_images.front()));
+    if (parts > 1) {
+        std::vector<PartGuidance> gates;
+        for (const PartSpec& p : r->description.parts.parts) {
+            gates.emplace_back();
+            gates.back().name = p.name;
+            gates.back().backend = exemplar_backend(p.tactile_images.front());
+        }
+        r->trainer->set_part_guidance(std::move(gates));
+    }
+    while (r->trainer->iteration() <= config.init_iterations + 1) r->trainer->step();
+    return r;
 }
 
 }  // namespace
@@ -108,6 +167,16 @@ int main(int argc, char** argv) {
                 ->MeasureProcessCPUTime()
                 ->Iterations(1);
         }
+        for (int n : {1, 2, 4})
+            benchmark::RegisterBenchmark(("refine/" + std::to_string(n) + "_parts").c_str(),
+                                         [two, n](benchmark::State& state) {
+                                             const auto r = refinement(two + "/scene.json", n);
+                                             for (auto _ : state) benchmark::DoNotOptimize(r->trainer->step());
+                                         })
+                ->Unit(benchmark::kMillisecond)
+                ->MeasureProcessCPUTime()
+                ->UseRealTime()
+                ->Iterations(3);
     } catch (const Error& e) {
         std::fprintf(stderr, "parts bench: %s\n", e.what());
         return 1;

@@ -75,8 +75,7 @@ int run_parts(const PartsCommandOptions& o) {
         const auto start = std::chrono::steady_clock::now();
         const ScenePartMaps laid = lay_scene_part_maps(description.parts, *input.atlas, seg.size, o.scene_path);
         const std::vector<Image>& layers = laid.layers;
-        const std::vector<int> labels = dilate_labels(seg.texel_part, seg.size, o.gutter);
-        const Image target = compose_part_target(labels, seg.size, layers, o.band);
+        const Image target = compose_part_target(seg.texel_part, seg.size, layers, o.band, o.gutter);
         write_atomically(base + "_tactile_target.png", [&](const std::string& tmp) {
             write_png(tmp, encode_normal_map(target), 8, Quantize::Truncate);
         });

@@ -12,12 +12,17 @@ namespace tdf {
 using detail::elementwise;
 using detail::ordered_sum;
 
-double mse_loss(const float* pred, const float* target, std::size_t count, float* grad, float weight) {
+namespace {
+
+// Squared error over `count` values, value i weighted by mask_of(i) on both sides (the
+// reference's MSE(M pred, M target)).
+template <typename MaskOf>
+double mse_impl(const float* pred, const float* target, std::size_t count, float* grad, float weight, MaskOf mask_of) {
     if (count == 0) return 0.0;
     const double sum = ordered_sum(count, [&](std::size_t b, std::size_t e) {
         double s = 0;
         for (std::size_t i = b; i < e; ++i) {
-            const double d = double(pred[i]) - double(target[i]);
+            const double d = double(mask_of(i)) * (double(pred[i]) - double(target[i]));
             s += d * d;
         }
         return s;
@@ -25,10 +30,25 @@ double mse_loss(const float* pred, const float* target, std::size_t count, float
     if (grad) {
         const float scale = float(2.0 * double(weight) / double(count));
         elementwise(count, [&](std::size_t b, std::size_t e) {
-            for (std::size_t i = b; i < e; ++i) grad[i] += scale * (pred[i] - target[i]);
+            for (std::size_t i = b; i < e; ++i) {
+                const float m = mask_of(i);
+                grad[i] += scale * m * m * (pred[i] - target[i]);
+            }
         });
     }
     return sum / double(count);
+}
+
+}  // namespace
+
+double mse_loss(const float* pred, const float* target, std::size_t count, float* grad, float weight) {
+    return mse_impl(pred, target, count, grad, weight, [](std::size_t) { return 1.0f; });
+}
+
+double masked_mse_loss(const float* pred, const float* target, const float* mask, int channels, std::size_t count,
+                       float* grad, float weight) {
+    const std::size_t c = std::size_t(channels);
+    return mse_impl(pred, target, count * c, grad, weight, [&](std::size_t i) { return mask[i / c]; });
 }
 
 double l1_loss(const float* pred, const float* target, std::size_t count, float* grad, float weight) {

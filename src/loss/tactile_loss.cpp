@@ -28,4 +28,11 @@ double tactile_guidance_loss(TactileGuidanceMetric metric, const Vec3f* pred, co
                     weight);
 }
 
+double masked_tactile_guidance_loss(TactileGuidanceMetric metric, const Vec3f* pred, const Vec3f* refined,
+                                    const float* mask, std::size_t count, Vec3f* grad, float weight) {
+    if (metric == TactileGuidanceMetric::Cosine) return masked_cosine_loss(pred, refined, mask, count, grad, weight);
+    return masked_mse_loss(reinterpret_cast<const float*>(pred), reinterpret_cast<const float*>(refined), mask, 3,
+                           count, reinterpret_cast<float*>(grad), weight);
+}
+
 }  // namespace tdf

@@ -104,7 +104,7 @@ std::vector<Image> lay_part_maps(const std::vector<PartTactile>& parts, int size
 }
 
 Image compose_part_target(const std::vector<int>& labels, int size, const std::vector<Image>& layers,
-                          float band) {
+                          float band, int gutter) {
     check_raster(labels, size, "compose_part_target");
     if (!(band >= 0.f && band <= 4.f)) throw_error("compose_part_target: band {} is not in [0, 4]", band);
     for (std::size_t p = 0; p < layers.size(); ++p)
@@ -139,6 +139,14 @@ Image compose_part_target(const std::vector<int>& labels, int size, const std::v
             out.data()[i * 3 + 2] = n.z;
         }
     });
+    if (gutter > 0) {
+        const std::vector<int> grown = dilate_labels(labels, size, gutter);
+        for (std::size_t i = 0; i < labels.size(); ++i)
+            if (labels[i] < 0 && grown[i] >= 0) {
+                const Vec3f n = texel3(layers[std::size_t(grown[i])], i);
+                std::copy(&n.x, &n.x + 3, out.data() + i * 3);
+            }
+    }
     return out;
 }
 

@@ -12,6 +12,7 @@
 #include <tdf/render/scene_assets.h>
 #include <tdf/tactile/tactile_map.h>
 #include <tdf/train/asset_export.h>
+#include <tdf/train/part_gating.h>
 #include <tdf/train/run_report.h>
 #include <tdf/train/run_guard.h>
 #include <tdf/train/texture_fidelity.h>
@@ -103,10 +104,13 @@ std::string object_name_for_prompt(const SceneDescription& d, const TriangleMesh
 
 namespace {
 
+// `override_config` (a part's guidance.config) replaces the run's guidance.<name> when not null.
 std::unique_ptr<GuidanceBackend> make_backend(const std::string& name, const RunConfig& config,
-                                              const std::vector<std::string>& tactile_images) {
+                                              const std::vector<std::string>& tactile_images,
+                                              const Json& override_config = Json()) {
     Json backend_config = Json::object();
     if (config.guidance_config.contains(name)) backend_config = config.guidance_config[name];
+    if (!override_config.is_null()) backend_config = override_config;
     auto backend = GuidanceBackend::create(name, backend_config);
     if (backend && !backend_config.contains("exemplars")) {
         // The scene's own tactile maps are the touched exemplars unless the config names others.
@@ -149,9 +153,8 @@ PartTraining prepare_part_training(const SceneDescription& description, const Tr
     input.where = where;
     PartTraining parts;
     parts.segmentation = segment_parts(description.parts, input);
-    parts.labels = dilate_labels(parts.segmentation.texel_part, size, gutter);
     parts.layers = lay_scene_part_maps(description.parts, mesh, size, where).layers;
-    parts.target = compose_part_target(parts.labels, size, parts.layers);
+    parts.target = compose_part_target(parts.segmentation.texel_part, size, parts.layers, kDefaultPartBand, gutter);
     return parts;
 }
 
@@ -198,7 +201,6 @@ void run_optimize(const OptimizeOptions& options) {
 
     // Multi-part: the segmentation and the composed target (README "Multi-part textures").
     std::unique_ptr<PartTraining> parts;
-    std::vector<std::string> exemplar_images = description.tactile_images;
     if (description.parts.enabled()) {
         if (config.evaluation != FieldEvaluation::Texture)
             throw_error("{}: multi-part scenes need field.evaluation=texture (pixel evaluation has no part support)",
@@ -209,10 +211,6 @@ void run_optimize(const OptimizeOptions& options) {
         target.tactile_target_override = &parts->target;
         target.texel_parts = &parts->segmentation.texel_part;
         target.part_names = parts->segmentation.part_names;
-        // One tactile backend for the whole object: every part's maps are its exemplars.
-        exemplar_images.clear();
-        for (const PartSpec& p : description.parts.parts)
-            exemplar_images.insert(exemplar_images.end(), p.tactile_images.begin(), p.tactile_images.end());
         std::string summary;
         for (std::size_t p = 0; p < parts->segmentation.part_count(); ++p)
             summary += fmt::format("{}{} {:.1f} %", p ? ", " : "", parts->segmentation.part_names[p],
@@ -222,10 +220,32 @@ void run_optimize(const OptimizeOptions& options) {
 
     Trainer trainer(target, config, description.seed);
     auto visual = make_backend(config.guidance_visual, config, description.tactile_images);
-    auto tactile = make_backend(config.guidance_tactile, config, exemplar_images);
-    if (!visual || !tactile)
+    // Multi-part: a tactile backend per part, with the part's own maps as exemplars and its own
+    // settings (parts.list[i].guidance), gated by the part's mask (README "Multi-part textures").
+    std::unique_ptr<GuidanceBackend> tactile;
+    bool tactile_on = false;
+    if (parts) {
+        std::vector<PartGuidance> part_guidance;
+        for (std::size_t k = 0; k < description.parts.parts.size(); ++k) {
+            const PartSpec& spec = description.parts.parts[k];
+            PartGuidance g;
+            g.name = spec.name;
+            g.prompt = spec.prompt;
+            g.settings = PartGuidanceSettings::from_json(
+                spec.guidance, fmt::format("{}: parts.list[{}].guidance", options.scene_path, k));
+            const std::string backend = g.settings.backend.empty() ? config.guidance_tactile : g.settings.backend;
+            g.backend = make_backend(backend, config, spec.tactile_images, g.settings.backend_config);
+            tactile_on = tactile_on || g.backend;
+            part_guidance.push_back(std::move(g));
+        }
+        trainer.set_part_guidance(std::move(part_guidance));
+    } else {
+        tactile = make_backend(config.guidance_tactile, config, description.tactile_images);
+        tactile_on = tactile != nullptr;
+    }
+    if (!visual || !tactile_on)
         log_info("guidance: {}{}; the refinement phase uses the matching terms only for what is disabled",
-                 visual ? "" : "visual off ", tactile ? "" : "tactile off");
+                 visual ? "" : "visual off ", tactile_on ? "" : "tactile off");
     trainer.set_guidance(std::move(visual), std::move(tactile));
     log_info("tactile patches: {:.2f} pixels per tactile map texel ({} px over {:.4g} mesh units)", trainer.pixels_per_texel(),
              config.patch_resolution, 2.0 * double(config.patch_half_extent));

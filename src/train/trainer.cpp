@@ -1,5 +1,7 @@
 #include <tdf/train/trainer.h>
 
+#include <tdf/train/part_gating.h>
+#include <tdf/train/part_label_head.h>
 #include <tdf/train/texture_fidelity.h>
 
 #include <tdf/atlas/uv_metrics.h>
@@ -13,6 +15,7 @@
 #include <tdf/render/shading.h>
 #include <tdf/loss/tactile_loss.h>
 #include <tdf/core/image_ops.h>
+#include <tdf/parts/part_target.h>
 #include <tdf/render/shading.h>
 #include <tdf/render/texture_gradient.h>
 #include <tdf/render/trace.h>
@@ -65,6 +68,28 @@ Vec3f gather3(const MipTexture& map, const TrilinearTaps& taps) {
 }
 
 void copy_into(const Image& image, float* out) { std::copy(image.values().begin(), image.values().end(), out); }
+
+// Appends one patch to a tactile guidance request: its rendered view-space normals `pred`, its
+// coverage (times `weight` per pixel when given: a part's mask) and its surface frames.
+void add_patch_to_request(GuidanceRequest& request, const GBuffer& g, const Camera& camera, const Vec3f* pred,
+                          const float* weight) {
+    const int w = g.width, h = g.height;
+    const ViewRotation rot = view_rotation(camera);
+    Image normals(w, h, 3), mask(w, h, 1), surface_normals(w, h, 3), surface_tangents(w, h, 4);
+    for (std::size_t p = 0; p < g.pixel_count(); ++p) {
+        std::copy(&pred[p].x, &pred[p].x + 3, normals.data() + 3 * p);
+        mask.data()[p] = weight ? g.mask[p] * weight[p] : g.mask[p];
+        if (g.mask[p] <= 0.0f) continue;
+        const Vec3f normal = view_space_normal(rot, g.normal[p]), tangent = view_space_normal(rot, g.tangent[p]);
+        std::copy(&normal.x, &normal.x + 3, surface_normals.data() + 3 * p);
+        std::copy(&tangent.x, &tangent.x + 3, surface_tangents.data() + 4 * p);
+        surface_tangents.data()[4 * p + 3] = g.handedness[p];
+    }
+    request.images.push_back(std::move(normals));
+    request.masks.push_back(std::move(mask));
+    request.surface_normals.push_back(std::move(surface_normals));
+    request.surface_tangents.push_back(std::move(surface_tangents));
+}
 
 }  // namespace
 
@@ -131,16 +156,19 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
             throw_error("multi-part scenes need field.evaluation=texture (the part labels and the composed tactile "
                         "target live on the UV atlas); pixel evaluation with parts is not supported");
         TDF_CHECK(target.tactile_target_override && target.part_names.size() >= 2);
-        m_train_labels = target.part_names.size() == 2;
-        if (!m_train_labels)
-            log_warning("{} parts: the label head has 2 logits, so it is not trained; the label map is the "
-                        "segmentation's", target.part_names.size());
     }
-    field_config.labels = m_train_labels;
     m_field = std::make_unique<TextureField>(field_config, FieldDomain{bounds.lower, bounds.upper}, seed);
     AdamHyperparams hyper;
     hyper.learning_rate = config.learning_rate;
     m_adam = std::make_unique<Adam>(m_field->parameter_count(), hyper);
+    if (parts) {
+        // One logit per part (the field's own label rows are fixed at 2 and stay off).
+        m_label_head = std::make_unique<PartLabelHead>(int(target.part_names.size()), m_field->feature_count(), seed);
+        m_label_adam = std::make_unique<Adam>(m_label_head->parameters().size(), hyper);
+        std::vector<PartGuidance> gates(target.part_names.size());
+        for (std::size_t k = 0; k < gates.size(); ++k) gates[k].name = target.part_names[k];
+        m_part_gate = std::make_unique<PartGate>(config.texture_size, std::move(gates));
+    }
     m_gradient.assign(m_field->parameter_count(), 0.0f);
     if (texture_space()) {
         if (!target.mesh->has_uvs())
@@ -173,6 +201,14 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
 
 Trainer::~Trainer() = default;
 
+void Trainer::set_part_guidance(std::vector<PartGuidance> parts) {
+    TDF_CHECK(m_part_gate && parts.size() == std::size_t(m_part_gate->part_count()));
+    for (const PartGuidance& p : parts)
+        if (p.backend && !p.backend->supports(GuidanceKind::Tactile))
+            throw_error("part '{}': guidance backend '{}' cannot do tactile guidance", p.name, p.backend->name());
+    m_part_gate->set_parts(std::move(parts));
+}
+
 void Trainer::set_guidance(std::unique_ptr<GuidanceBackend> visual, std::unique_ptr<GuidanceBackend> tactile) {
     if (visual && !visual->supports(GuidanceKind::Visual))
         throw_error("guidance backend '{}' cannot do visual guidance", visual->name());
@@ -182,27 +218,25 @@ void Trainer::set_guidance(std::unique_ptr<GuidanceBackend> visual, std::unique_
     m_tactile_guidance = std::move(tactile);
 }
 
-std::vector<float> Trainer::parameters() const {
-    std::vector<float> all = m_field->parameters();
-    if (m_maps) all.insert(all.end(), m_maps->residual().begin(), m_maps->residual().end());
+namespace {
+std::vector<float> concatenate(const std::vector<FloatRange>& ranges) {
+    std::vector<float> all;
+    for (const FloatRange& r : ranges) {
+        if (r.data) all.insert(all.end(), r.data, r.data + r.size);
+        else all.resize(all.size() + r.size, 0.0f);
+    }
     return all;
 }
+}  // namespace
+
+std::vector<float> Trainer::parameters() const { return concatenate(checkpoint_pieces().parameters); }
 
 AdamState Trainer::optimizer_state() const {
-    AdamState state = m_adam->state();
-    if (m_residual_adam) {
-        const AdamState& r = m_residual_adam->state();
-        state.m.insert(state.m.end(), r.m.begin(), r.m.end());
-        state.v.insert(state.v.end(), r.v.begin(), r.v.end());
-    } else if (m_maps) {
-        // The Jacobi step keeps no moments; zeros keep the checkpoint's layout (one moment per
-        // parameter) the same for both residual optimizers.
-        state.m.resize(state.m.size() + m_maps->residual().size(), 0.0f);
-        state.v.resize(state.v.size() + m_maps->residual().size(), 0.0f);
-    }
-    return state;
+    const CheckpointPieces pieces = checkpoint_pieces();
+    return AdamState{concatenate(pieces.m), concatenate(pieces.v), pieces.step};
 }
 
+// The field, then (texture evaluation) the residual, then (multi-part) the label head.
 CheckpointPieces Trainer::checkpoint_pieces() const {
     const AdamState& field = m_adam->state();
     CheckpointPieces pieces;
@@ -213,9 +247,18 @@ CheckpointPieces Trainer::checkpoint_pieces() const {
     if (m_maps) {
         const std::vector<float>& residual = m_maps->residual();
         pieces.parameters.push_back({residual.data(), residual.size()});
+        // The Jacobi step keeps no moments; zeros keep the checkpoint's layout (one moment per
+        // parameter) the same for both residual optimizers.
         const AdamState* r = m_residual_adam ? &m_residual_adam->state() : nullptr;
-        pieces.m.push_back({r ? r->m.data() : nullptr, residual.size()});  // Jacobi: zeros, as optimizer_state()
+        pieces.m.push_back({r ? r->m.data() : nullptr, residual.size()});
         pieces.v.push_back({r ? r->v.data() : nullptr, residual.size()});
+    }
+    if (m_label_head) {
+        const std::vector<float>& head = m_label_head->parameters();
+        const AdamState& l = m_label_adam->state();
+        pieces.parameters.push_back({head.data(), head.size()});
+        pieces.m.push_back({l.m.data(), l.m.size()});
+        pieces.v.push_back({l.v.data(), l.v.size()});
     }
     return pieces;
 }
@@ -223,16 +266,24 @@ CheckpointPieces Trainer::checkpoint_pieces() const {
 void Trainer::restore(int iteration, const std::vector<float>& parameters, const AdamState& adam) {
     const std::size_t field_count = m_field->parameter_count();
     const std::size_t residual_count = m_maps ? m_maps->residual().size() : 0;
-    const std::size_t moments = field_count + residual_count;
-    if (parameters.size() != field_count + residual_count || adam.m.size() != moments || adam.v.size() != moments)
-        throw_error("checkpoint has {} parameters, this configuration needs {}", parameters.size(),
-                    field_count + residual_count);
+    const std::size_t label_count = m_label_head ? m_label_head->parameters().size() : 0;
+    const std::size_t moments = field_count + residual_count + label_count;
+    if (parameters.size() != moments || adam.m.size() != moments || adam.v.size() != moments)
+        throw_error("checkpoint has {} parameters, this configuration needs {}", parameters.size(), moments);
     const auto split = [&](const std::vector<float>& all, std::size_t begin, std::size_t count) {
         return std::vector<float>(all.begin() + std::ptrdiff_t(begin), all.begin() + std::ptrdiff_t(begin + count));
     };
     m_field->parameters() = split(parameters, 0, field_count);
     m_adam->restore(AdamState{split(adam.m, 0, field_count), split(adam.v, 0, field_count), adam.step});
     m_iteration = iteration;
+    if (m_label_head) {
+        // The head takes one step per matching iteration.
+        const std::size_t first = field_count + residual_count;
+        m_label_head->parameters() = split(parameters, first, label_count);
+        m_label_adam->restore(AdamState{split(adam.m, first, label_count), split(adam.v, first, label_count),
+                                        std::min(iteration, m_config.init_iterations)});
+        m_gate_labels_stale = true;
+    }
     if (m_maps) {
         m_maps->residual() = split(parameters, field_count, residual_count);
         // The residual takes one step per refinement iteration, from the end of matching on.
@@ -268,14 +319,11 @@ BakedMaps Trainer::export_maps() const {
 }
 
 std::vector<int> Trainer::predicted_texel_parts() const {
-    if (!m_target.texel_parts) return {};
-    if (!m_train_labels) return *m_target.texel_parts;
+    if (!m_label_head) return {};
     const TexelAtlas& atlas = *m_atlas;
-    std::vector<FieldOutputs> outputs(atlas.covered_count());
-    m_field->evaluate(atlas.points.data(), atlas.points.size(), outputs.data());
+    const std::vector<int> predicted = m_label_head->predict(*m_field, atlas.points.data(), atlas.points.size());
     std::vector<int> labels(atlas.texel_count(), -1);
-    for (std::size_t k = 0; k < outputs.size(); ++k)
-        labels[atlas.texels[k]] = outputs[k].label[1] > outputs[k].label[0] ? 1 : 0;
+    for (std::size_t k = 0; k < predicted.size(); ++k) labels[atlas.texels[k]] = predicted[k];
     return labels;
 }
 
@@ -295,7 +343,9 @@ Trainer::Phase Trainer::phase_of(int i) const {
     phase.albedo_weight = phase.per_pixel_albedo ? cfg.weights.albedo_init : cfg.weights.albedo_refine;
     phase.tactile_weight = i < cfg.init_iterations ? cfg.weights.tactile_init : cfg.weights.tactile_refine;
     phase.visual_guidance = m_visual_guidance && i >= cfg.init_iterations && cfg.weights.visual_guidance > 0;
-    phase.tactile_guidance = m_tactile_guidance && i > cfg.init_iterations && cfg.weights.tactile_guidance > 0;
+    const bool tactile_backend = m_part_gate ? m_part_gate->has_guidance(cfg.weights.tactile_guidance)
+                                             : m_tactile_guidance && cfg.weights.tactile_guidance > 0;
+    phase.tactile_guidance = tactile_backend && i > cfg.init_iterations;
     return phase;
 }
 
@@ -316,6 +366,17 @@ LossRecord Trainer::step() {
 
 LossRecord Trainer::loss_and_gradient(int i) {
     if (texture_space()) prepare_maps();
+    if (m_label_head) m_label_gradient.assign(m_label_head->parameters().size(), 0.0f);  // trained in matching only
+    if (m_part_gate && m_gate_labels_stale) {
+        // The masks of the patch views: the head's parts at the texels, and in the gutter the part
+        // of the texel each gutter texel copies (what a lookup there reads, where its gradient goes).
+        const std::vector<int> predicted = predicted_texel_parts();
+        std::vector<int> labels(predicted.size(), -1);
+        for (std::size_t t = 0; t < labels.size(); ++t)
+            if (m_atlas->source[t] >= 0) labels[t] = predicted[m_atlas->texels[std::size_t(m_atlas->source[t])]];
+        m_part_gate->set_texel_part(std::move(labels));
+        m_gate_labels_stale = false;
+    }
     const Phase phase = phase_of(i);
     Rng rng = Rng::stream(m_seed, std::uint64_t(i));
     auto t0 = Clock::now();
@@ -386,17 +447,28 @@ void Trainer::swap_patch_and_view_buffers() {
 std::vector<float> Trainer::gradient() const {
     std::vector<float> all = m_gradient;
     if (m_maps) all.insert(all.end(), m_residual_gradient.begin(), m_residual_gradient.end());
+    if (m_label_head) {
+        all.insert(all.end(), m_label_gradient.begin(), m_label_gradient.end());
+        all.resize(all.size() + m_label_head->parameters().size() - m_label_gradient.size(), 0.0f);
+    }
     return all;
 }
 
 void Trainer::set_parameters(const std::vector<float>& parameters) {
     const std::size_t field_count = m_field->parameter_count();
     const std::size_t residual_count = m_maps ? m_maps->residual().size() : 0;
-    if (parameters.size() != field_count + residual_count)
-        throw_error("{} parameters given, this configuration has {}", parameters.size(), field_count + residual_count);
+    const std::size_t label_count = m_label_head ? m_label_head->parameters().size() : 0;
+    if (parameters.size() != field_count + residual_count + label_count)
+        throw_error("{} parameters given, this configuration has {}", parameters.size(),
+                    field_count + residual_count + label_count);
     std::copy_n(parameters.begin(), field_count, m_field->parameters().begin());
+    if (m_label_head) {
+        std::copy_n(parameters.begin() + std::ptrdiff_t(field_count + residual_count), label_count,
+                    m_label_head->parameters().begin());
+        m_gate_labels_stale = true;
+    }
     if (m_maps) {
-        std::copy(parameters.begin() + std::ptrdiff_t(field_count), parameters.end(), m_maps->residual().begin());
+        std::copy_n(parameters.begin() + std::ptrdiff_t(field_count), residual_count, m_maps->residual().begin());
         if (m_maps_ready) {
             m_maps->evaluate_field(*m_field, m_config.refine_grid);
             m_maps->update();
@@ -429,16 +501,9 @@ LossRecord Trainer::fit_maps(int i) {
     b.grads.assign(n, FieldOutputGrads{});
 
     const float wa = cfg.weights.texture_albedo, wt = cfg.weights.texture_tactile;
-    // Multi-part: cross-entropy of the label head against the known part of each texel, weight
-    // 1 (the reference's lambda_label_field), mean over the picked texels that have a part.
-    const std::vector<int>* parts = m_train_labels ? m_target.texel_parts : nullptr;
-    std::size_t labelled = 0;
-    if (parts)
-        for (std::size_t k = 0; k < n; ++k) labelled += (*parts)[atlas.texels[picked[k]]] >= 0;
-    const float wl_n = labelled > 0 ? kLabelWeight / float(labelled) : 0.0f;
-    std::vector<double> partial(chunk_count(n, kPixelGrain) * 3, 0.0);
+    std::vector<double> partial(chunk_count(n, kPixelGrain) * 2, 0.0);
     parallel_for(n, kPixelGrain, [&](std::size_t begin, std::size_t end) {
-        double albedo_sum = 0, tactile_sum = 0, label_sum = 0;
+        double albedo_sum = 0, tactile_sum = 0;
         for (std::size_t k = begin; k < end; ++k) {
             const std::size_t t = atlas.texels[picked[k]];
             const float* ta = m_albedo_target.data() + 3 * t;
@@ -451,49 +516,52 @@ LossRecord Trainer::fit_maps(int i) {
             const Vec3f p = b.outputs[k].normal;  // unit
             tactile_sum += 1.0 - double(dot(p, target_normal));
             b.grads[k].d_normal = normalize_backward(p, target_normal * (-wt / float(n)), 1e-12f);
-            const int part = parts ? (*parts)[t] : -1;
-            if (part >= 0) {
-                // Two-class softmax cross-entropy: d/dz_c = softmax_c - [c == part].
-                const float* z = b.outputs[k].label;
-                const float m = std::max(z[0], z[1]);
-                const float e0 = std::exp(z[0] - m), e1 = std::exp(z[1] - m);
-                const float p0 = e0 / (e0 + e1);
-                const float probability[2] = {p0, 1.0f - p0};
-                label_sum += double(m - z[part]) + std::log(double(e0) + double(e1));
-                for (int c = 0; c < 2; ++c)
-                    b.grads[k].d_label[c] = wl_n * (probability[c] - (c == part ? 1.0f : 0.0f));
-            }
         }
         const std::size_t c = begin / kPixelGrain;
-        partial[3 * c] = albedo_sum;
-        partial[3 * c + 1] = tactile_sum;
-        partial[3 * c + 2] = label_sum;
+        partial[2 * c] = albedo_sum;
+        partial[2 * c + 1] = tactile_sum;
     });
-    double albedo_sum = 0, tactile_sum = 0, label_sum = 0;
-    for (std::size_t c = 0; c < partial.size() / 3; ++c)
-        albedo_sum += partial[3 * c], tactile_sum += partial[3 * c + 1], label_sum += partial[3 * c + 2];
+    double albedo_sum = 0, tactile_sum = 0;
+    for (std::size_t c = 0; c < partial.size() / 2; ++c) albedo_sum += partial[2 * c], tactile_sum += partial[2 * c + 1];
     LossRecord record;
     record.iteration = i;
     record.terms["texture_albedo"] = wa * albedo_sum / (3.0 * double(n));
     record.terms["texture_tactile"] = wt * tactile_sum / double(n);
     record.terms["total"] = record.terms["texture_albedo"] + record.terms["texture_tactile"];
-    if (parts) {
-        record.terms["texture_label"] = double(kLabelWeight) * label_sum / double(std::max<std::size_t>(labelled, 1));
+    std::fill(m_gradient.begin(), m_gradient.end(), 0.0f);
+    if (m_label_head) {
+        record.terms["texture_label"] = fit_labels(n);
         record.terms["total"] += record.terms["texture_label"];
     }
     for (const auto& [name, value] : record.terms)
         if (!std::isfinite(value))
             throw_error("iteration {}: loss term '{}' is not finite ({}); the field was not updated", i, name, value);
-    std::fill(m_gradient.begin(), m_gradient.end(), 0.0f);
     m_field->backward(b.points.data(), b.grads.data(), n, m_gradient, b.field_cache);
     for (float g : m_gradient)
         if (!std::isfinite(g)) throw_error("iteration {}: the field gradient is not finite; the field was not updated", i);
+    for (float g : m_label_gradient)
+        if (!std::isfinite(g)) throw_error("iteration {}: the label head gradient is not finite; nothing was updated", i);
     m_adam->step(m_field->parameters(), m_gradient);
+    if (m_label_head) {
+        m_label_adam->step(m_label_head->parameters(), m_label_gradient);
+        m_gate_labels_stale = true;
+    }
     ++m_iteration;
     if (m_iteration == cfg.init_iterations) prepare_maps();
     record.seconds = seconds_since(start);
     m_times.matching += record.seconds;
     return record;
+}
+
+// Multi-part: cross-entropy of the label head against the known part of each fit texel, weight
+// 1 (the reference's lambda_label_field), mean over the texels that have a part.
+double Trainer::fit_labels(std::size_t n) {
+    const Batch& b = *m_batch;
+    std::vector<int> labels(n);
+    for (std::size_t k = 0; k < n; ++k) labels[k] = (*m_target.texel_parts)[m_atlas->texels[b.fit_texels[k]]];
+    m_label_gradient.assign(m_label_head->parameters().size(), 0.0f);
+    return m_label_head->loss_and_gradient(*m_field, b.points.data(), labels.data(), n, kLabelWeight, m_label_gradient,
+                                           &m_gradient);
 }
 
 // ---- 1. Cameras: patches first, then visual views (the order of random draws of spec 9) ----
@@ -623,11 +691,14 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
             }
         });
     }
-    if (phase.tactile_weight > 0 && P > 0)
+    if (m_part_gate) {
+        gated_tactile_terms(phase, record);
+    } else if (phase.tactile_weight > 0 && P > 0) {
         record.terms["tactile_matching"] =
             phase.tactile_weight * tactile_matching_loss(b.patch_pred.data(), b.patch_target.data(),
                                                          b.patch_pred.size(), b.patch_grad.data(), phase.tactile_weight);
-    if (phase.tactile_guidance && P > 0) {
+    }
+    if (phase.tactile_guidance && P > 0 && !m_part_gate) {
         const auto g0 = Clock::now();
         GuidanceRequest request;
         request.kind = GuidanceKind::Tactile;
@@ -636,25 +707,9 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
         request.iteration = phase.i;
         request.seed = m_seed ^ (std::uint64_t(phase.i) << 20);
         request.pixels_per_texel = m_patch_pixels_per_texel;
-        for (int k = 0; k < P; ++k) {
-            const GBuffer& g = b.gbuffers[std::size_t(k)];
-            const ViewRotation rot = view_rotation(b.cameras[std::size_t(k)]);
-            Image normals(R, R, 3), mask(R, R, 1), surface_normals(R, R, 3), surface_tangents(R, R, 4);
-            const Vec3f* pred = b.patch_pred.data() + std::size_t(k) * patch_pixels;
-            for (std::size_t p = 0; p < patch_pixels; ++p) {
-                std::copy(&pred[p].x, &pred[p].x + 3, normals.data() + 3 * p);
-                mask.data()[p] = g.mask[p];
-                if (g.mask[p] <= 0.0f) continue;
-                const Vec3f normal = view_space_normal(rot, g.normal[p]), tangent = view_space_normal(rot, g.tangent[p]);
-                std::copy(&normal.x, &normal.x + 3, surface_normals.data() + 3 * p);
-                std::copy(&tangent.x, &tangent.x + 3, surface_tangents.data() + 4 * p);
-                surface_tangents.data()[4 * p + 3] = g.handedness[p];
-            }
-            request.images.push_back(std::move(normals));
-            request.masks.push_back(std::move(mask));
-            request.surface_normals.push_back(std::move(surface_normals));
-            request.surface_tangents.push_back(std::move(surface_tangents));
-        }
+        for (int k = 0; k < P; ++k)
+            add_patch_to_request(request, b.gbuffers[std::size_t(k)], b.cameras[std::size_t(k)],
+                                 b.patch_pred.data() + std::size_t(k) * patch_pixels, nullptr);
         const GuidanceResult result = m_tactile_guidance->refine(request);
         validate_result(request, result, m_tactile_guidance->name());
         if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, phase.i, request, result);
@@ -669,7 +724,7 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
             w * tactile_guidance_loss(metric, b.patch_pred.data(), refined.data(), refined.size(), b.patch_grad.data(), w);
         m_times.guidance += seconds_since(g0);
     }
-    if (texture_space()) {
+    if (texture_space() && !m_part_gate) {
         // 1 - cos has unit curvature across the unit sphere; MSE on 3 components 2 / 3 per value.
         const double pixels = double(P) * double(patch_pixels);
         double kappa = phase.tactile_weight > 0 ? double(phase.tactile_weight) / pixels : 0.0;
@@ -704,6 +759,76 @@ Vec3f Trainer::lookup_target_normal(std::size_t q) const {
     TrilinearTaps taps;
     m_tactile_target_texture.taps(b.lookup_uv[q], b.lookup_lod[q], -1, taps);
     return safe_normalize(gather3(m_tactile_target_texture, taps));
+}
+
+// Multi-part (README "Multi-part textures"): each patch pixel's part from the gate's labels at
+// its lookup, the per-part matching and guidance terms, and the Jacobi curvature per part.
+void Trainer::gated_tactile_terms(const Phase& phase, LossRecord& record) {
+    const RunConfig& cfg = m_config;
+    Batch& b = *m_batch;
+    PartGate& gate = *m_part_gate;
+    const int P = cfg.patch_batch_size, R = cfg.patch_resolution;
+    const std::size_t patch_pixels = std::size_t(R) * std::size_t(R);
+    std::vector<std::int16_t> pixel_part(b.patch_pred.size(), -1), guidance_part(b.patch_pred.size(), -1);
+    for (int k = 0; k < P; ++k) {
+        const std::vector<int>& point_of = b.point_of[std::size_t(k)];
+        parallel_for(patch_pixels, kPixelGrain, [&](std::size_t begin, std::size_t end) {
+            TrilinearTaps taps;
+            for (std::size_t p = begin; p < end; ++p) {
+                const int q = point_of[p];
+                if (q < 0) continue;
+                const std::size_t i = std::size_t(k) * patch_pixels + p;
+                pixel_part[i] = std::int16_t(gate.part_at(b.lookup_uv[std::size_t(q)]));
+                m_maps->normal().taps(b.lookup_uv[std::size_t(q)], b.lookup_lod[std::size_t(q)], -1, taps);
+                guidance_part[i] = std::int16_t(gate.pure_part(taps));
+            }
+        });
+    }
+    GatedPatches patches;
+    patches.patches = P;
+    patches.resolution = R;
+    patches.pred = b.patch_pred.data();
+    patches.target = b.patch_target.data();
+    patches.part = pixel_part.data();
+    patches.guidance_part = guidance_part.data();
+    patches.grad = b.patch_grad.data();
+    patches.add_patch = [&](GuidanceRequest& request, int k, const float* mask) {
+        add_patch_to_request(request, b.gbuffers[std::size_t(k)], b.cameras[std::size_t(k)],
+                             b.patch_pred.data() + std::size_t(k) * patch_pixels, mask);
+    };
+    GatedPhase gated;
+    gated.iteration = phase.i;
+    gated.matching_weight = phase.tactile_weight;
+    gated.guidance = phase.tactile_guidance;
+    gated.guidance_weight = cfg.weights.tactile_guidance;
+    gated.metric = cfg.tactile_guidance_loss == TactileGuidanceLoss::Cosine ? TactileGuidanceMetric::Cosine
+                                                                            : TactileGuidanceMetric::Mse;
+    gated.seed = m_seed ^ (std::uint64_t(phase.i) << 20);
+    gated.pixels_per_texel = m_patch_pixels_per_texel;
+    const auto g0 = Clock::now();
+    const auto frames = [&](const GuidanceRequest& request, const GuidanceResult& result, int part) {
+        if (!m_frames_folder.empty())
+            save_guidance_frames(m_frames_folder + "/part_" + gate.part(part).name, phase.i, request, result);
+    };
+    gate.tactile_terms(patches, gated, record, frames);
+    if (gated.guidance) m_times.guidance += seconds_since(g0);
+    // Jacobi denominators as the ungated terms', with each pixel's part's weights.
+    const double pixels = double(P) * double(patch_pixels);
+    const double guidance_curvature = cfg.tactile_guidance_loss == TactileGuidanceLoss::Cosine ? 1.0 : 2.0 / 3.0;
+    const auto kappa = [&](int matching, int guiding) {
+        double c = 0;
+        if (matching >= 0 && phase.tactile_weight > 0) c += double(gate.matching_weight(matching, phase.tactile_weight)) / pixels;
+        if (guiding >= 0 && gated.guidance && gate.part(guiding).backend)
+            c += double(gate.guidance_weight(guiding, cfg.weights.tactile_guidance)) / pixels * guidance_curvature;
+        return float(c);
+    };
+    for (int k = 0; k < P; ++k) {
+        const std::vector<int>& point_of = b.point_of[std::size_t(k)];
+        for (std::size_t p = 0; p < patch_pixels; ++p) {
+            const std::size_t i = std::size_t(k) * patch_pixels + p;
+            if (point_of[p] >= 0) b.curvature[std::size_t(point_of[p])] = kappa(pixel_part[i], guidance_part[i]);
+        }
+    }
 }
 
 // ---- 4b. Visual terms on the global views (spec 5.2, 5.4) -----------------------------------

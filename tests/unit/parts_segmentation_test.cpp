@@ -10,6 +10,7 @@
 #include <tdf/render/scene_assets.h>
 #include <tdf/scene/procedural_mesh.h>
 
+#include "common/spot_truth.h"
 #include "common/test_paths.h"
 
 #include <gtest/gtest.h>
@@ -56,11 +57,14 @@ double texel_accuracy(const std::vector<int>& got, const std::vector<int>& want)
     return total ? double(right) / double(total) : 0.0;
 }
 
+// The error segment_parts throws, which must be one line (README "Errors").
 std::string error_of(const PartsSpec& spec, const PartSegmentationInput& in) {
     try {
         segment_parts(spec, in);
     } catch (const Error& e) {
-        return e.what();
+        const std::string message = e.what();
+        EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+        return message;
     }
     return "(no error)";
 }
@@ -358,17 +362,7 @@ TEST(PartSegmentation, SpotPatchesFromColourOnTheRealMesh) {
     in.size = 512;
     in.where = scene + ": parts";
     const PartSegmentation seg = segment_parts(description.parts, in);
-    UvRaster raster = rasterize_uv(assets->mesh, 512);
-    add_partial_texels(assets->mesh, raster);
-    std::vector<int> dark(raster.texel_count(), -1);
-    for (std::size_t i = 0; i < dark.size(); ++i)
-        if (raster.triangle[i] >= 0)
-            dark[i] =
-                srgb_to_lab(
-                    albedo_at(assets->mesh, assets->material, raster.triangle[i], raster.barycentric[i]))
-                            .x < 36.f
-                    ? 1
-                    : 0;
+    const std::vector<int> dark = test::spot_dark_patches(assets->mesh, assets->material, 512);
     const double accuracy = texel_accuracy(seg.texel_part, dark);
     std::printf(
         "spot patches: %.4f of foreground texels agree with the L* < 36 rule, patches %.2f %%, %.2f s\n",

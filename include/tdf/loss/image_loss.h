@@ -30,6 +30,11 @@ struct ImageBatchShape {
 double mse_loss(const float* pred, const float* target, std::size_t count, float* grad = nullptr,
                 float weight = 1.0f);
 
+/// mse_loss of (mask x pred, mask x target) over `count` vectors of `channels` values, one mask
+/// value per vector (multi-part tactile guidance, spec 5.5): the mean runs over all values.
+double masked_mse_loss(const float* pred, const float* target, const float* mask, int channels, std::size_t count,
+                       float* grad = nullptr, float weight = 1.0f);
+
 /// Mean absolute error over all `count` values (torch `F.l1_loss`; d|x|/dx at 0 is 0, like torch).
 double l1_loss(const float* pred, const float* target, std::size_t count, float* grad = nullptr,
                float weight = 1.0f);

@@ -26,4 +26,10 @@ double tactile_matching_loss(const Vec3f* pred, const Vec3f* target, std::size_t
 double tactile_guidance_loss(TactileGuidanceMetric metric, const Vec3f* pred, const Vec3f* refined,
                              std::size_t count, Vec3f* grad = nullptr, float weight = 1.0f);
 
+/// Multi-part tactile guidance (spec 5.5, 7.3): tactile_guidance_loss of (mask x pred,
+/// mask x refined), one mask value per pixel, the mean over all `count` pixels (the value of a
+/// cosine term counts pixels outside the mask as cos 0, as the reference's masked terms do).
+double masked_tactile_guidance_loss(TactileGuidanceMetric metric, const Vec3f* pred, const Vec3f* refined,
+                                    const float* mask, std::size_t count, Vec3f* grad = nullptr, float weight = 1.0f);
+
 }  // namespace tdf

@@ -49,10 +49,15 @@ ScenePartMaps lay_scene_part_maps(const PartsSpec& spec, const TriangleMesh& atl
 constexpr float kDefaultPartBand = 1.5f;
 
 /// The composed target normal map (3 channels, unit normals in [-1, 1]) from per-texel labels
-/// (index i * size + j; -1 = no part: flat (0,0,1)) and the layers of lay_part_maps. `band` in
-/// [0, 4]; 0 = hard cut.
+/// of the surface (index i * size + j; -1 = no face covers the texel) and the layers of
+/// lay_part_maps. `band` in [0, 4]; 0 = hard cut. The blend looks only at surface texels; then
+/// the target grows `gutter` texels into the empty atlas (dilate_labels), each such texel taking
+/// its grown part's layer unblended, so lookups near chart borders stay in their part; texels
+/// left without a part are flat (0,0,1). Blending against labels already grown into the gutter
+/// would let another chart's gutter pull a part's texels into the band: that made the 2.83-texel
+/// bleed measured with 4 parts (README "Multi-part textures").
 Image compose_part_target(const std::vector<int>& labels, int size, const std::vector<Image>& layers,
-                          float band = kDefaultPartBand);
+                          float band = kDefaultPartBand, int gutter = 0);
 
 /// Mip levels: the ordinary box-filtered pyramid of the composite (MipTexture) is what to use.
 /// A coarse texel then mixes two parts only when its footprint at level 0 holds texels of both

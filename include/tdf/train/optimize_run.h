@@ -31,13 +31,12 @@ struct OptimizeOptions {
 std::string object_name_for_prompt(const SceneDescription& description, const TriangleMesh& mesh);
 
 /// What a multi-part scene gives the trainer (README "Multi-part textures"): the segmentation
-/// at the map size, its labels grown `gutter` texels into the empty atlas, each part's tactile
-/// map laid over the whole atlas with its layout, and the composed target (TrainingTarget).
+/// at the map size, each part's tactile map laid over the whole atlas with its layout, and the
+/// composed target (TrainingTarget), grown `gutter` texels into the empty atlas.
 struct PartTraining {
     PartSegmentation segmentation;
-    std::vector<int> labels;    ///< dilate_labels(segmentation.texel_part, size, gutter)
     std::vector<Image> layers;  ///< lay_part_maps, one per part
-    Image target;               ///< compose_part_target(labels, size, layers)
+    Image target;               ///< compose_part_target(segmentation.texel_part, size, layers, band, gutter)
 };
 /// Segments `mesh` (which has UVs: the trained atlas) into the scene's parts at `size` texels
 /// and composes the target. Throws tdf::Error naming `where` on bad input.

@@ -51,9 +51,9 @@ struct TrainingTarget {
     /// map holds all parts.
     const Image* tactile_target_override = nullptr;
     /// Per atlas texel (i * size + j), the ground-truth part, -1 where no face covers the texel
-    /// (PartSegmentation::texel_part). With exactly 2 parts the field's label head is trained on
-    /// them by cross-entropy during the matching phase; with more parts it is not (the head has 2
-    /// logits) and predicted_texel_parts() returns these labels.
+    /// (PartSegmentation::texel_part). The label head (PartLabelHead, one logit per part) is
+    /// trained on them by softmax cross-entropy during the matching phase; its prediction gates
+    /// the tactile terms of refinement per part (PartGate).
     const std::vector<int>* texel_parts = nullptr;
     std::vector<std::string> part_names;
 };
@@ -108,6 +108,10 @@ struct StageTimes {
     Json to_json(int iterations) const;
 };
 
+class PartLabelHead;
+class PartGate;
+struct PartGuidance;
+
 class Trainer {
 public:
     /// Builds the field over the mesh's bounding box, initialised from `seed`.
@@ -117,6 +121,11 @@ public:
     /// Guidance backends for the refinement phase; nullptr disables a term (the run then logs
     /// that it refines with the matching terms only).
     void set_guidance(std::unique_ptr<GuidanceBackend> visual, std::unique_ptr<GuidanceBackend> tactile);
+    /// Multi-part: each part's tactile settings and guidance backend (one per part, in part
+    /// order, names as TrainingTarget::part_names). Without this call every part uses the run's
+    /// weights and no part has tactile guidance; the single tactile backend of set_guidance() is
+    /// not used with parts.
+    void set_part_guidance(std::vector<PartGuidance> parts);
     /// Writes every guidance request and result as PNG frames under `folder` (spec 8.2).
     void save_guidance_frames_to(const std::string& folder) { m_frames_folder = folder; }
 
@@ -139,7 +148,8 @@ public:
 
     TextureField& field() { return *m_field; }
     const TextureField& field() const { return *m_field; }
-    /// Every trained value: the field's parameters, then (texture evaluation) the residual.
+    /// Every trained value: the field's parameters, then (texture evaluation) the residual, then
+    /// (multi-part) the label head's.
     std::vector<float> parameters() const;
     /// The optimizer state matching parameters() (moments concatenated the same way).
     AdamState optimizer_state() const;
@@ -157,11 +167,12 @@ public:
     const Image& albedo_target() const { return m_albedo_target; }
     const Image& tactile_target() const { return m_tactile_target; }
     /// Multi-part: the part the label head predicts (argmax of its logits at each covered
-    /// texel's surface point), -1 at uncovered texels; size x size. With more than 2 parts (no
-    /// trained head) the given labels. Empty without parts.
+    /// texel's surface point), -1 at uncovered texels; size x size. Empty without parts.
     std::vector<int> predicted_texel_parts() const;
-    /// Whether the label head is trained (multi-part with exactly 2 parts).
-    bool trains_labels() const { return m_train_labels; }
+    /// Whether the label head is trained (multi-part).
+    bool trains_labels() const { return m_label_head != nullptr; }
+    /// Multi-part: the gate of the tactile terms (its labels are set when refinement starts).
+    const PartGate* part_gate() const { return m_part_gate.get(); }
 
     /// Albedo PSNR and tactile cosine on views and patches drawn from a stream no training
     /// iteration uses.
@@ -206,6 +217,10 @@ private:
     void trace_and_evaluate(const Camera& camera, GBuffer& g, std::vector<FieldOutputs>& outputs) const;
     /// Texture evaluation: the tactile target over the atlas at hit q's lookup, renormalised.
     Vec3f lookup_target_normal(std::size_t q) const;
+    /// Multi-part: the matching phase's label cross-entropy on the fit texels (gradient into the
+    /// grid's part of m_gradient and the head's own), its Adam step; the gated tactile terms.
+    double fit_labels(std::size_t n);
+    void gated_tactile_terms(const Phase& phase, LossRecord& record);
     bool texture_space() const { return m_config.evaluation == FieldEvaluation::Texture; }
 
     const TrainingTarget m_target;
@@ -223,7 +238,12 @@ private:
     std::unique_ptr<Adam> m_residual_adam;
     std::vector<float> m_residual_gradient;
     bool m_maps_ready = false;
-    bool m_train_labels = false;
+    // Multi-part.
+    std::unique_ptr<PartLabelHead> m_label_head;
+    std::unique_ptr<Adam> m_label_adam;
+    std::vector<float> m_label_gradient;
+    std::unique_ptr<PartGate> m_part_gate;
+    bool m_gate_labels_stale = true;  // the head or the grid changed since the gate's labels
     std::unique_ptr<GuidanceBackend> m_visual_guidance;
     std::unique_ptr<GuidanceBackend> m_tactile_guidance;
     std::unique_ptr<Batch> m_batch;
