@@ -23,6 +23,7 @@ ReliefShadingBackend::Options ReliefShadingBackend::Options::from_json(const Jso
     o.detail_sigma = reader.get<float>("detail_sigma", o.detail_sigma);
     o.curvature_sigma = reader.get<float>("curvature_sigma", o.curvature_sigma);
     o.curvature_percentile = reader.get<float>("curvature_percentile", o.curvature_percentile);
+    o.curvature_limit = reader.get<float>("curvature_limit", o.curvature_limit);
     if (reader.has("anchor")) {
         const std::string anchor = reader.require<std::string>("anchor");
         if (anchor == "reference") o.anchor = Anchor::Reference;
@@ -38,6 +39,8 @@ ReliefShadingBackend::Options ReliefShadingBackend::Options::from_json(const Jso
         throw_error("{}: curvature_sigma {} is outside [0, 32]", reader.where(), o.curvature_sigma);
     if (!(o.curvature_percentile > 0.0f && o.curvature_percentile <= 1.0f))
         throw_error("{}: curvature_percentile {} is outside (0, 1]", reader.where(), o.curvature_percentile);
+    if (!(o.curvature_limit >= 1.0f && o.curvature_limit <= 1000.0f))
+        throw_error("{}: curvature_limit {} is outside [1, 1000]", reader.where(), o.curvature_limit);
     return o;
 }
 
@@ -113,7 +116,7 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
         // Relief detail, high-passed at the same scale so that it does not move the local mean.
         Image relief(colour.width(), colour.height(), 3);
         for (std::size_t p = 0; p < colour.pixel_count(); ++p) {
-            const float k = scale > 0.0f ? std::clamp(curvature.data()[p] / scale, -1.0f, 1.0f) : 0.0f;
+            const float k = scale > 0.0f ? std::clamp(curvature.data()[p] / scale, -m_options.curvature_limit, m_options.curvature_limit) : 0.0f;
             for (int c = 0; c < 3; ++c) {
                 const float mean = local_mean.data()[3 * p + std::size_t(c)];
                 relief.data()[3 * p + std::size_t(c)] =

@@ -115,6 +115,33 @@ TEST(GuidanceReliefShading, SparseReliefOnAFlatSurfaceIsShaded) {
     EXPECT_NEAR(out.at(5, 58, 0), 0.5f, 1e-6f);  // flat and far: unchanged
 }
 
+TEST(GuidanceReliefShading, StrongCreasesAreNotFlattenedToPlateaus) {
+    // Mild bumps and one sharp one, as a pebble's creases among its facets: clamping the
+    // normalised curvature at 1 shades the whole sharp bump alike (a plateau), the default limit
+    // keeps its profile, so the colour follows the geometry more closely.
+    std::vector<float> h = relief(5);
+    for (float& v : h) v *= 0.25f;
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x)
+            h[std::size_t(y * kSize + x)] += 6.0f * std::exp(-float((x - 32) * (x - 32) + (y - 32) * (y - 32)) / 6.0f);
+    const Image normals = normals_of_height(h, kSize);
+    GuidanceRequest r;
+    r.kind = GuidanceKind::Visual;
+    r.strength = 0.504;
+    r.images = {Image(kSize, kSize, 3, 0.5f)};
+    r.control = {to_bae_control(normals)};
+    r.masks = {Image(kSize, kSize, 1, 1.0f)};
+    ReliefShadingBackend::Options clamped;
+    clamped.curvature_limit = 1.0f;
+    const Image out = ReliefShadingBackend({}).refine(r).refined[0];
+    const Image plateau = ReliefShadingBackend(clamped).refine(r).refined[0];
+    const double correlation = colour_geometry_correlation(out, normals, r.masks[0]);
+    const double clamped_correlation = colour_geometry_correlation(plateau, normals, r.masks[0]);
+    EXPECT_GT(correlation, clamped_correlation + 0.05) << correlation << " vs " << clamped_correlation;
+    EXPECT_GT(out.at(32, 32, 0), plateau.at(32, 32, 0) + 0.01f);  // the sharp peak stays the lightest
+    EXPECT_THROW(ReliefShadingBackend::Options::from_json(Json{{"curvature_limit", 0.5}}), Error);
+}
+
 TEST(GuidanceReliefShading, ColourGeometryAlignmentRisesOverARun) {
     const Image normals = normals_of_height(relief(3), kSize);
     const Image mask = disc_mask();

@@ -13,8 +13,9 @@
 ///  2. Curvature k = divergence of the (x, y) normal field, d n_x / d x + d n_y / d y with y up
 ///     (> 0 on ridges and bumps, < 0 in cavities), central differences, 0 where a neighbour is
 ///     background; divided by the `curvature_percentile` quantile of |k| over the curved
-///     foreground pixels (|k| > 1e-3 per pixel) and clamped to [-1, 1] (so the effect does not
-///     depend on resolution or relief height; a flat surface gets no relief).
+///     foreground pixels (|k| > 1e-3 per pixel) and clamped to [-limit, limit]
+///     (`curvature_limit`; so the effect does not depend on resolution or relief height; a flat
+///     surface gets no relief).
 ///  3. The render c is split into its local mean L (mask-weighted Gaussian, `detail_sigma`
 ///     pixels) and detail c - L. The relief detail is R = contrast k (1 - L) on ridges and
 ///     contrast k L in cavities, minus its own local mean (so it is pure detail and the local
@@ -45,6 +46,10 @@ public:
         float curvature_sigma = 1.0f;
         /// "curvature_percentile": quantile of |curvature| (over curved pixels) mapped to 1, (0, 1].
         float curvature_percentile = 0.9f;
+        /// "curvature_limit": the normalised curvature is clamped to +-this, [1, 1000]. A clamp
+        /// at 1 flattens the profile of the strongest creases (ridges and grooves become plateaus
+        /// of constant shading), which lowers the colour-geometry correlation it is meant to raise.
+        float curvature_limit = 4.0f;
         /// "anchor": "reference" (default) adds the relief to the request's reference images (the
         /// input asset's render) when it has them: c' = reference + f R, so the input's own detail
         /// is kept and repeated refinement converges; "current" replaces part of the current
