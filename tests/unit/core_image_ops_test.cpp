@@ -1,3 +1,4 @@
+#include "common/test_images.h"
 #include <tdf/core/error.h>
 #include <tdf/core/image_ops.h>
 #include <tdf/core/parallel.h>
@@ -12,20 +13,8 @@
 using namespace tdf;
 
 namespace {
-
-Image random_image(int w, int h, int c, std::uint64_t seed) {
-    Image img(w, h, c);
-    Rng rng(seed);
-    for (float& v : img.values()) v = rng.uniform(-1.f, 1.f);
-    return img;
-}
-
-double inner(const Image& a, const Image& b) {
-    EXPECT_EQ(a.values().size(), b.values().size());
-    double s = 0;
-    for (std::size_t i = 0; i < a.values().size(); ++i) s += double(a.values()[i]) * double(b.values()[i]);
-    return s;
-}
+using test::inner_product;
+using test::random_image;
 
 double mean(const Image& image) {
     double s = 0;
@@ -181,7 +170,7 @@ TEST(ImageOps, BoxDownsampleAdjointIsTheTranspose) {
         const Image y = random_image(coarse_x.width(), coarse_x.height(), 3, std::uint64_t(w + 7 * h));
         Image adjoint_y(w, h, 3);
         downsample_box_adjoint(y, adjoint_y);
-        const double lhs = inner(coarse_x, y), rhs = inner(x, adjoint_y);
+        const double lhs = inner_product(coarse_x, y), rhs = inner_product(x, adjoint_y);
         EXPECT_NEAR(lhs, rhs, 1e-5 * (1 + std::abs(lhs))) << w << "x" << h;
     }
 }
@@ -193,8 +182,8 @@ TEST(ImageOps, AreaAndBilinearAdjointsAreTransposes) {
         const Image y = random_image(dw, dh, 2, std::uint64_t(sh * 100 + dh));
         Image area_adjoint(sw, sh, 2);
         resize_area_adjoint(y, area_adjoint);
-        EXPECT_NEAR(inner(resize_area(x, dw, dh), y), inner(x, area_adjoint), 1e-5) << sw << "x" << sh;
-        EXPECT_NEAR(inner(resize_bilinear(x, dw, dh), y), inner(x, resize_bilinear_adjoint(y, sw, sh)), 1e-5)
+        EXPECT_NEAR(inner_product(resize_area(x, dw, dh), y), inner_product(x, area_adjoint), 1e-5) << sw << "x" << sh;
+        EXPECT_NEAR(inner_product(resize_bilinear(x, dw, dh), y), inner_product(x, resize_bilinear_adjoint(y, sw, sh)), 1e-5)
             << sw << "x" << sh;
     }
 }
@@ -246,7 +235,7 @@ TEST(ImageOps, ZeroPaddedConvolutionIsSelfAdjoint) {
     Image kx(9, 6, 3), ky(9, 6, 3);
     convolve_separable(x, kx, kernel, Addressing::Border);
     convolve_separable(y, ky, kernel, Addressing::Border);
-    EXPECT_NEAR(inner(kx, y), inner(x, ky), 1e-5);
+    EXPECT_NEAR(inner_product(kx, y), inner_product(x, ky), 1e-5);
 }
 
 TEST(ImageOps, ConvolutionOnAStridedView) {

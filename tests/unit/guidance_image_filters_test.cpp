@@ -1,6 +1,7 @@
 // The guidance filters against plain, obviously correct implementations: the fast blur (blocked,
 // vectorised tap sums) and the blur evaluated only where a bilinear resize reads it must give the
 // numbers of the straightforward separable convolution and of blur-then-resize.
+#include "common/test_images.h"
 #include <tdf/core/parallel.h>
 #include <tdf/core/rng.h>
 #include <tdf/guidance/image_filters.h>
@@ -14,13 +15,8 @@
 
 namespace tdf {
 namespace {
-
-Image random_image(int w, int h, int c, std::uint64_t seed) {
-    Image image(w, h, c);
-    Rng rng(seed);
-    for (float& v : image.values()) v = rng.uniform(-1.0f, 1.0f);
-    return image;
-}
+using test::inner_product;
+using test::random_image;
 
 /// Coverage with a hard background block (wider than any kernel here), an antialiased edge and
 /// partial values, so both the weighting and the "no weight: keep the input" rule are exercised.

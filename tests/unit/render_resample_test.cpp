@@ -1,3 +1,4 @@
+#include "common/test_images.h"
 #include <tdf/core/error.h>
 #include <tdf/core/rng.h>
 #include <tdf/render/resample.h>
@@ -10,17 +11,8 @@
 using namespace tdf;
 
 namespace {
-Image random_image(int w, int h, int c, std::uint64_t seed) {
-    Image img(w, h, c);
-    Rng rng(seed);
-    for (float& v : img.values()) v = rng.uniform(-1.f, 1.f);
-    return img;
-}
-double inner(const Image& a, const Image& b) {
-    double s = 0;
-    for (std::size_t i = 0; i < a.values().size(); ++i) s += double(a.values()[i]) * b.values()[i];
-    return s;
-}
+using test::inner_product;
+using test::random_image;
 }  // namespace
 
 TEST(Resample, MatchesPyTorchAlignCornersFalse) {
@@ -50,8 +42,8 @@ TEST(Resample, AdjointIsTheExactTranspose) {
                                          std::array{3, 5, 8, 11}, std::array{16, 16, 16, 16}}) {
         const Image x = random_image(sw, sh, 3, 1);
         const Image y = random_image(dw, dh, 3, 2);
-        const double lhs = inner(downsample_bilinear(x, dw, dh), y);
-        const double rhs = inner(x, downsample_bilinear_adjoint(y, sw, sh));
+        const double lhs = inner_product(downsample_bilinear(x, dw, dh), y);
+        const double rhs = inner_product(x, downsample_bilinear_adjoint(y, sw, sh));
         EXPECT_NEAR(lhs, rhs, 1e-6 * (std::abs(lhs) + 1)) << sw << "x" << sh << " -> " << dw << "x" << dh;
     }
 }

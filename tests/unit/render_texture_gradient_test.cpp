@@ -1,6 +1,7 @@
 // The adjoint of trilinear sampling: recorded taps reproduce the lookup, and scattering a
 // gradient through them then down the pyramid is the exact transpose of "build pyramid, sample"
 // (dot-product test), checked against finite differences on level-0 texels too.
+#include "common/test_images.h"
 #include <tdf/core/rng.h>
 #include <tdf/render/texture.h>
 #include <tdf/render/texture_gradient.h>
@@ -12,13 +13,8 @@
 using namespace tdf;
 
 namespace {
-
-Image random_image(int w, int h, int c, std::uint64_t seed) {
-    Rng rng(seed);
-    Image img(w, h, c);
-    for (float& v : img.values()) v = rng.uniform();
-    return img;
-}
+using test::inner_product;
+using test::random_image;
 
 struct Lookup {
     Vec2f uv;
@@ -48,7 +44,7 @@ double loss(const MipTexture& tex, const std::vector<Lookup>& lookups, const std
 
 TEST(TextureGradient, TapsReproduceTrilinearLookups) {
     for (int size : {16, 13}) {  // power of two, and odd sizes (uneven box taps)
-        const MipTexture tex(random_image(size, size + 3, 3, 7));
+        const MipTexture tex(random_image(size, size + 3, 3, 7, 0.0f, 1.0f));
         float max_error = 0;
         for (const Lookup& l : random_lookups(2000, 11)) {
             for (int max_level : {-1, 2}) {
@@ -69,7 +65,7 @@ TEST(TextureGradient, TapsReproduceTrilinearLookups) {
 
 TEST(TextureGradient, ScatterAndCollapseAreTheTransposeOfSampling) {
     for (int size : {32, 21}) {
-        const Image base = random_image(size, size, 2, 3);
+        const Image base = random_image(size, size, 2, 3, 0.0f, 1.0f);
         const MipTexture tex(base);
         const std::vector<Lookup> lookups = random_lookups(500, 5);
         std::vector<float> g(lookups.size() * 2);
@@ -104,7 +100,7 @@ TEST(TextureGradient, ScatterAndCollapseAreTheTransposeOfSampling) {
 }
 
 TEST(TextureGradient, AssignRebuildsThePyramidInPlace) {
-    const Image a = random_image(20, 12, 3, 1), b = random_image(20, 12, 3, 2);
+    const Image a = random_image(20, 12, 3, 1, 0.0f, 1.0f), b = random_image(20, 12, 3, 2, 0.0f, 1.0f);
     MipTexture tex(a);
     tex.assign(b);
     const MipTexture fresh(b);
