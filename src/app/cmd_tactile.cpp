@@ -293,9 +293,11 @@ void write_heights(const std::string& path, const HeightMap& map) {
 }
 
 void log_quilt(const QuiltStats& s, const HeightMap& map) {
-    log_info("quilted {} blocks ({} candidates); seam error {:.3g} vs {:.3g} for random placement",
+    log_info("quilted {} blocks ({} candidates, at least {:.0f} % inside the textured region); seam error {:.3g} vs "
+             "{:.3g} for random placement",
              s.blocks_per_side * s.blocks_per_side,
              s.candidates,
+             100.0 * s.coverage_needed,
              s.mean_cut_error,
              s.mean_random_error);
     log_verbose("quilted map: {}x{}", map.height.width(), map.height.height());
@@ -409,18 +411,29 @@ void run_convert(const State& s) {
         const QuiltOptions quilt_options = resolve_block(s.convert_quilt.options, s.convert_quilt.block, patches);
         result = quilt_height_maps(patches, quilt_options, &stats, &cuts);
         log_quilt(stats, result);
-        // auto: optimise when the region is too thin for whole blocks (README "tdf tactile").
-        const bool thin = stats.coverage_needed < double(quilt_options.min_coverage) - 1e-9;
-        if (s.synthesis == "optimize" || (s.synthesis == "auto" && thin)) {
-            if (s.synthesis == "auto")
-                log_info("the textured region is too thin for whole {} px blocks (best blocks {:.0f} % inside): "
-                         "refining by texture optimisation",
-                         quilt_options.block,
-                         100.0 * stats.coverage_needed);
+        // auto: the quilt, unless it misses the limits and texture optimisation misses
+        // fewer (README "tdf tactile": the regions of thin rims and lines).
+        auto misses = [&](const HeightMap& map) {
+            const float g = s.normal.resolve_strength(patches[0]);
+            const Image out = normal_map_from_height(map, s.normal.mode(), g);
+            std::vector<MaterialComparison> c;
+            for (std::size_t i = 0; i < s.inputs.size(); ++i)
+                c.push_back(compare_material(scale_normal_slopes(figures[i].input_normals, g), figures[i].region, out));
+            return material_misses(c);
+        };
+        const double quilt_misses = s.synthesis == "auto" ? misses(result) : 0.0;
+        if (s.synthesis == "optimize" || (s.synthesis == "auto" && quilt_misses > 0)) {
             if (steps) write_height_preview(step_path("6_quilted_initial.png"), result.height);
             TextureOptimizationOptions o = s.optimization;
             o.seed = quilt_options.seed;
-            result = optimize_height_maps(patches, result, o);
+            HeightMap optimized = optimize_height_maps(patches, result, o);
+            const double optimized_misses = s.synthesis == "auto" ? misses(optimized) : 0.0;
+            if (s.synthesis == "auto")
+                log_info("the quilt misses the material limits by {:.3f}, texture optimisation by {:.3f}: keeping {}",
+                         quilt_misses,
+                         optimized_misses,
+                         optimized_misses < quilt_misses ? "the optimised map" : "the quilt");
+            if (s.synthesis == "optimize" || optimized_misses < quilt_misses) result = std::move(optimized);
         }
         if (steps) write_height_preview(step_path("6_quilted.png"), result.height);
     }

@@ -259,6 +259,16 @@ std::vector<std::string> check_material(const MaterialComparison& c, const Mater
     return bad;
 }
 
+double material_misses(const std::vector<MaterialComparison>& comparisons, const MaterialLimits& limits) {
+    double miss = 0;
+    for (const MaterialComparison& c : comparisons) {
+        miss += std::max({0.0, limits.min_ratio - c.tilt_ratio, c.tilt_ratio - limits.max_ratio});
+        miss += std::max(0.0, c.flat_excess - limits.flat_slack);
+        miss += std::max(0.0, c.distance - limits.max_distance);
+    }
+    return miss;
+}
+
 SeamStatistics seam_statistics(const Image& height, const Image& seams) {
     TDF_CHECK_EQ(height.channels(), 1);
     const int w = height.width(), h = height.height();

@@ -62,10 +62,20 @@ Converted convert(const std::vector<std::string>& paths, int size, HeightInputOp
     c.patch = patches[0];
     QuiltStats stats;
     c.result = quilt_height_maps(patches, options, &stats, &c.cuts);
-    if (stats.coverage_needed < options.min_coverage - 1e-9)  // --synthesis auto
-        c.result = optimize_height_maps(patches, c.result, TextureOptimizationOptions{});
-    c.seams = seam_statistics(c.result.height, c.cuts);
     c.strength = auto_strength(patches[0], Amplitude::Auto);
+    auto misses = [&](const HeightMap& map) {  // --synthesis auto, as convert decides
+        const Image out = normal_map_from_height(map, Amplitude::Auto, c.strength);
+        std::vector<MaterialComparison> m;
+        for (std::size_t i = 0; i < paths.size(); ++i)
+            m.push_back(compare_material(scale_normal_slopes(steps[i].input_normals, c.strength), steps[i].region, out));
+        return material_misses(m);
+    };
+    const double quilt_misses = misses(c.result);
+    if (quilt_misses > 0) {
+        HeightMap optimized = optimize_height_maps(patches, c.result, TextureOptimizationOptions{});
+        if (misses(optimized) < quilt_misses) c.result = std::move(optimized);
+    }
+    c.seams = seam_statistics(c.result.height, c.cuts);
     const Image out = quantized_normals(normal_map_from_height(c.result, Amplitude::Auto, c.strength), 8);
     for (std::size_t i = 0; i < paths.size(); ++i)
         c.comparisons.push_back(

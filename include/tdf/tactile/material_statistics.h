@@ -92,6 +92,11 @@ struct MaterialLimits {
 };
 std::vector<std::string> check_material(const MaterialComparison& c, const MaterialLimits& limits = {});
 
+/// How far comparisons lie outside `limits`, summed over inputs: relative excess of the tilt
+/// ratio beyond its bounds + flat excess beyond the slack + distance beyond its bound. 0 when
+/// all are within (`tdf tactile convert --synthesis auto` keeps the synthesis that misses less).
+double material_misses(const std::vector<MaterialComparison>& comparisons, const MaterialLimits& limits = {});
+
 /// Are the seams of a synthesised height map invisible (issue 11, goal 5)? Measured on the
 /// heights with periodic forward differences (the map tiles).
 struct SeamStatistics {
