@@ -307,10 +307,16 @@ SeamStatistics seam_statistics(const Image& height, const Image& seams) {
     };
     for (bool columns : {true, false}) {
         const int across = columns ? w : h;
-        double interior = 0;
-        for (int i = 0; i + 1 < across; ++i) interior += step(columns, i);
-        interior /= double(across - 1);
-        (columns ? s.wrap_ratio_columns : s.wrap_ratio_rows) = interior > 0 ? step(columns, across - 1) / interior : 0.0;
+        // The wrap's step against the steps of the lines next to it, which cross the same
+        // content: one line's step varies with what it crosses (a band of pebble edges), so
+        // against the mean of all lines a seamless torus fails wherever its wrap falls in a
+        // rough band (Football rows: 27 % of ordinary rows step more than 1.2x the mean).
+        const int wrap = across - 1;
+        const int k = std::min(kWrapBaselineLines, (across - 1) / 2);
+        double nearby = 0;
+        for (int d = 1; d <= k; ++d) nearby += step(columns, wrap - d) + step(columns, (wrap + d) % across);
+        nearby /= 2.0 * k;
+        (columns ? s.wrap_ratio_columns : s.wrap_ratio_rows) = nearby > 0 ? step(columns, wrap) / nearby : 0.0;
         s.duplicated_border = s.duplicated_border || same(columns, 0, 1) || same(columns, across - 1, across - 2);
     }
     return s;

@@ -271,6 +271,25 @@ TEST(MaterialSeams, TheMeasureSeesAStepACutAndARepeatedBorder) {
     EXPECT_TRUE(seam_statistics(repeated, Image()).duplicated_border);
 }
 
+TEST(MaterialSeams, ASeamlessMapPassesWhereverItsWrapFalls) {
+    // Periodic, with its relief strongest around column 0: the wrap crosses the roughest band.
+    // Every line is an ordinary line of the torus, so the wrap must not count as a seam,
+    // although its step is far above the mean step over all columns.
+    Image h(64, 64, 1);
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x)
+            h.at(x, y, 0) = float((1.0 + 0.8 * std::cos(2 * kPi * x / 64)) * std::sin(2 * kPi * (5 * x + 2 * y) / 64));
+    auto column_step = [&](int x) {
+        double sum = 0;
+        for (int y = 0; y < 64; ++y) sum += std::abs(h.at((x + 1) % 64, y, 0) - h.at(x, y, 0));
+        return sum / 64;
+    };
+    double mean = 0;
+    for (int x = 0; x < 63; ++x) mean += column_step(x) / 63;
+    EXPECT_GT(column_step(63) / mean, 1.4) << "the test needs a wrap in a rough band";
+    EXPECT_LT(seam_statistics(h, Image()).wrap_ratio_columns, 1.05);
+}
+
 TEST(MaterialSeams, CutsAndWrapAreNoRougherThanTheInterior) {
     HeightMap patch;
     patch.height = synthetic_texture(128, 14);

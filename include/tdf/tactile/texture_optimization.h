@@ -2,14 +2,17 @@
 /// Texture optimisation (Kwatra, Essa, Bobick & Kwatra 2005): refines a synthesised texture so
 /// that every neighbourhood of it resembles a neighbourhood of the exemplars' textured regions.
 ///
-/// Alternates two steps over overlapping square windows laid on a grid (every window/4 px):
+/// Alternates two steps over overlapping square windows laid on a grid (every window/4 px; the
+/// last, finest side at every pixel, so its per-pixel choice leaves no line pattern):
 ///  - E: for each output window, the nearest exemplar window (sum of squared differences after
 ///    removing both windows' means: heights matter by their shape, not their level), searched
 ///    with PatchMatch (Barnes et al. 2009: the previous match, the neighbours' matches shifted,
 ///    a shrinking random search, fresh random draws). Only windows lying at least
 ///    `min_coverage` in their exemplar's region are sources, so flat gel never comes back.
 ///  - M: every output pixel becomes the robust weighted mean (Kwatra's weight |x - z|^(r - 2),
-///    r = 0.8) of the matched windows covering it, each shifted to the output window's mean.
+///    r = 0.8) of the matched windows covering it, each shifted to the output window's mean;
+///    the very last M step takes each pixel from its best-matching window instead (a mean of
+///    disagreeing windows is smoother than any of them).
 /// Window sides run coarse to fine (32, 16, 8 px), a few iterations each. Overlapping windows
 /// are averaged, so no cut line survives (unlike quilting's boundary cuts).
 ///
