@@ -405,6 +405,7 @@ void run_convert(const State& s) {
         write_height_preview(step_path(prefix + "5_patch.png"), f.patch);
     }
     HeightMap result = patches[0];
+    const float strength = s.normal.resolve_strength(patches[0]);  // logs its choice once
     Image cuts;  // where the quilt's boundary cuts run
     if (!s.no_quilt) {
         QuiltStats stats;
@@ -414,11 +415,11 @@ void run_convert(const State& s) {
         // auto: the quilt, unless it misses the limits and texture optimisation misses
         // fewer (README "tdf tactile": the regions of thin rims and lines).
         auto misses = [&](const HeightMap& map) {
-            const float g = s.normal.resolve_strength(patches[0]);
-            const Image out = normal_map_from_height(map, s.normal.mode(), g);
+            const Image out = normal_map_from_height(map, s.normal.mode(), strength);
             std::vector<MaterialComparison> c;
             for (std::size_t i = 0; i < s.inputs.size(); ++i)
-                c.push_back(compare_material(scale_normal_slopes(figures[i].input_normals, g), figures[i].region, out));
+                c.push_back(
+                    compare_material(scale_normal_slopes(figures[i].input_normals, strength), figures[i].region, out));
             return material_misses(c);
         };
         const double quilt_misses = s.synthesis == "auto" ? misses(result) : 0.0;
@@ -437,7 +438,6 @@ void run_convert(const State& s) {
         }
         if (steps) write_height_preview(step_path("6_quilted.png"), result.height);
     }
-    const float strength = s.normal.resolve_strength(patches[0]);
 
     // What the output keeps of each input's material (README "tdf tactile": statistics).
     const Image output = normal_map_from_height(result, s.normal.mode(), strength);
@@ -478,7 +478,7 @@ void run_convert(const State& s) {
     if (!s.no_quilt && result.tileable) {
         const SeamStatistics seams = seam_statistics(result.height, cuts);
         log_info("seams: height gradient energy on the cuts {:.2f}x the rest's, step across the wrap {:.2f}x "
-                 "(columns) and {:.2f}x (rows) the interior step{}",
+                 "(columns) and {:.2f}x (rows) the step of the lines next to it{}",
                  seams.cut_ratio,
                  seams.wrap_ratio_columns,
                  seams.wrap_ratio_rows,

@@ -115,7 +115,7 @@ struct SeamStatistics {
 constexpr double kSeamLimit = 1.2;
 /// Lines on either side of the wrap-around that its step is compared with. The nearest lines:
 /// a seam is a one-line step, and farther lines cross other content (on the shared samples,
-/// 0-5 % of ordinary lines step more than 1.2x their 2 + 2 neighbours, 0-19 % their 4 + 4).
+/// 0-8 % of ordinary lines step more than 1.2x their 2 + 2 neighbours, 0-19 % their 4 + 4).
 constexpr int kWrapBaselineLines = 2;
 /// `seams`: 1 channel, the map's size, non-zero on cut pixels (empty: cut_ratio stays 0).
 SeamStatistics seam_statistics(const Image& height, const Image& seams);
