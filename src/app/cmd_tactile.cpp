@@ -293,9 +293,11 @@ void write_heights(const std::string& path, const HeightMap& map) {
 }
 
 void log_quilt(const QuiltStats& s, const HeightMap& map) {
-    log_info("quilted {} blocks ({} candidates); seam error {:.3g} vs {:.3g} for random placement",
+    log_info("quilted {} blocks ({} candidates, at least {:.0f} % inside the textured region); seam error {:.3g} vs "
+             "{:.3g} for random placement",
              s.blocks_per_side * s.blocks_per_side,
              s.candidates,
+             100.0 * s.coverage_needed,
              s.mean_cut_error,
              s.mean_random_error);
     log_verbose("quilted map: {}x{}", map.height.width(), map.height.height());
@@ -322,7 +324,8 @@ struct State {
     PatchArgs patch;
     QuiltArgs quilt, convert_quilt;
     NormalArgs normal;
-    std::string in, out, steps_dir, region_quilt = "off";
+    std::string in, out, steps_dir, region_quilt = "off", synthesis = "auto";
+    TextureOptimizationOptions optimization;
     std::vector<std::string> inputs;
     bool no_quilt = false;
     CLI::App *height = nullptr, *patch_cmd = nullptr, *quilt_cmd = nullptr, *normal_cmd = nullptr,
@@ -402,14 +405,39 @@ void run_convert(const State& s) {
         write_height_preview(step_path(prefix + "5_patch.png"), f.patch);
     }
     HeightMap result = patches[0];
+    const float strength = s.normal.resolve_strength(patches[0]);  // logs its choice once
+    Image cuts;  // where the quilt's boundary cuts run
     if (!s.no_quilt) {
         QuiltStats stats;
-        result = quilt_height_maps(
-            patches, resolve_block(s.convert_quilt.options, s.convert_quilt.block, patches), &stats);
+        const QuiltOptions quilt_options = resolve_block(s.convert_quilt.options, s.convert_quilt.block, patches);
+        result = quilt_height_maps(patches, quilt_options, &stats, &cuts);
         log_quilt(stats, result);
+        // auto: the quilt, unless it misses the limits and texture optimisation misses
+        // fewer (README "tdf tactile": the regions of thin rims and lines).
+        auto misses = [&](const HeightMap& map) {
+            const Image out = normal_map_from_height(map, s.normal.mode(), strength);
+            std::vector<MaterialComparison> c;
+            for (std::size_t i = 0; i < s.inputs.size(); ++i)
+                c.push_back(
+                    compare_material(scale_normal_slopes(figures[i].input_normals, strength), figures[i].region, out));
+            return material_misses(c);
+        };
+        const double quilt_misses = s.synthesis == "auto" ? misses(result) : 0.0;
+        if (s.synthesis == "optimize" || (s.synthesis == "auto" && quilt_misses > 0)) {
+            if (steps) write_height_preview(step_path("6_quilted_initial.png"), result.height);
+            TextureOptimizationOptions o = s.optimization;
+            o.seed = quilt_options.seed;
+            HeightMap optimized = optimize_height_maps(patches, result, o);
+            const double optimized_misses = s.synthesis == "auto" ? misses(optimized) : 0.0;
+            if (s.synthesis == "auto")
+                log_info("the quilt misses the material limits by {:.3f}, texture optimisation by {:.3f}: keeping {}",
+                         quilt_misses,
+                         optimized_misses,
+                         optimized_misses < quilt_misses ? "the optimised map" : "the quilt");
+            if (s.synthesis == "optimize" || optimized_misses < quilt_misses) result = std::move(optimized);
+        }
         if (steps) write_height_preview(step_path("6_quilted.png"), result.height);
     }
-    const float strength = s.normal.resolve_strength(patches[0]);
 
     // What the output keeps of each input's material (README "tdf tactile": statistics).
     const Image output = normal_map_from_height(result, s.normal.mode(), strength);
@@ -447,6 +475,20 @@ void run_convert(const State& s) {
     const std::string material =
         reports.size() == 1 ? reports[0] : fmt::format("[{}]", fmt::join(reports, ", "));
     ImageMetadata metadata{{"tdf:material", material}};
+    if (!s.no_quilt && result.tileable) {
+        const SeamStatistics seams = seam_statistics(result.height, cuts);
+        log_info("seams: height gradient energy on the cuts {:.2f}x the rest's, step across the wrap {:.2f}x "
+                 "(columns) and {:.2f}x (rows) the step of the lines next to it{}",
+                 seams.cut_ratio,
+                 seams.wrap_ratio_columns,
+                 seams.wrap_ratio_rows,
+                 seams.duplicated_border ? ", duplicated border lines" : "");
+        if (std::max({seams.cut_ratio, seams.wrap_ratio_columns, seams.wrap_ratio_rows}) > kSeamLimit ||
+            seams.duplicated_border)
+            log_warning("{}: seams may be visible (limit {:.1f}x the interior)", s.out, kSeamLimit);
+        metadata["tdf:seams"] = seams.json();
+        if (steps) write_text_atomically(step_path("8_seams.json"), seams.json() + "\n");
+    }
     NormalArgs normal = s.normal;
     normal.bits = png ? std::to_string(bits) : normal.bits;
     normal.write(s.out, result, strength, metadata);
@@ -511,6 +553,19 @@ Command register_tactile(CLI::App& root) {
     s->convert->add_option("-o,--output", s->out, "output normal map .png (or .exr)")->required();
     s->convert->add_option("--steps-png", s->steps_dir, "write a PNG of every step into this folder");
     s->convert->add_flag("--no-quilt", s->no_quilt, "stop after the patch: normal map of the patch itself");
+    s->convert
+        ->add_option("--synthesis",
+                     s->synthesis,
+                     "quilt (Efros-Freeman with boundary cuts), optimize (the quilt refined by texture "
+                     "optimisation, Kwatra et al. 2005), or auto (optimize when the textured region is too "
+                     "thin for whole blocks)")
+        ->check(CLI::IsMember({"auto", "quilt", "optimize"}))
+        ->capture_default_str();
+    s->convert->add_option("--optimize-iterations", s->optimization.iterations, "EM iterations per window size")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    s->convert->add_option("--optimize-windows", s->optimization.windows, "window sides, coarse to fine")
+        ->capture_default_str();
     s->input.add(s->convert);
     s->patch.add(s->convert);
     s->convert_quilt.add(s->convert, true);

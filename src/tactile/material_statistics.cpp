@@ -227,6 +227,78 @@ std::vector<std::string> check_material(const MaterialComparison& c, const Mater
     return bad;
 }
 
+double material_misses(const std::vector<MaterialComparison>& comparisons, const MaterialLimits& limits) {
+    double miss = 0;
+    for (const MaterialComparison& c : comparisons) {
+        miss += std::max({0.0, limits.min_ratio - c.tilt_ratio, c.tilt_ratio - limits.max_ratio});
+        miss += std::max(0.0, c.flat_excess - limits.flat_slack);
+        miss += std::max(0.0, c.distance - limits.max_distance);
+    }
+    return miss;
+}
+
+SeamStatistics seam_statistics(const Image& height, const Image& seams) {
+    TDF_CHECK_EQ(height.channels(), 1);
+    const int w = height.width(), h = height.height();
+    SeamStatistics s;
+    if (w < 3 || h < 3) return s;
+    if (!seams.empty()) {
+        TDF_CHECK(seams.width() == w && seams.height() == h);
+        double on = 0, off = 0, n_on = 0, n_off = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const double gx = height.at((x + 1) % w, y, 0) - height.at(x, y, 0);
+                const double gy = height.at(x, (y + 1) % h, 0) - height.at(x, y, 0);
+                const double e = gx * gx + gy * gy;
+                if (seams.at(x, y, 0) != 0.0f)
+                    on += e, n_on += 1;
+                else
+                    off += e, n_off += 1;
+            }
+        if (n_on > 0 && n_off > 0 && off > 0) s.cut_ratio = (on / n_on) / (off / n_off);
+    }
+    // Mean |step| from line i to line i + 1 (wrapping), columns or rows.
+    auto step = [&](bool columns, int i) {
+        const int along = columns ? h : w, across = columns ? w : h;
+        double sum = 0;
+        for (int k = 0; k < along; ++k)
+            sum += columns ? std::abs(height.at((i + 1) % across, k, 0) - height.at(i, k, 0))
+                           : std::abs(height.at(k, (i + 1) % across, 0) - height.at(k, i, 0));
+        return sum / along;
+    };
+    auto same = [&](bool columns, int a, int b) {
+        const int along = columns ? h : w;
+        for (int k = 0; k < along; ++k)
+            if ((columns ? height.at(a, k, 0) : height.at(k, a, 0)) != (columns ? height.at(b, k, 0) : height.at(k, b, 0)))
+                return false;
+        return true;
+    };
+    for (bool columns : {true, false}) {
+        const int across = columns ? w : h;
+        // The wrap's step against the steps of the lines next to it, which cross the same
+        // content: one line's step varies with what it crosses (a band of pebble edges), so
+        // against the mean of all lines a seamless torus fails wherever its wrap falls in a
+        // rough band (Football rows: 27 % of ordinary rows step more than 1.2x the mean).
+        const int wrap = across - 1;
+        const int k = std::min(kWrapBaselineLines, (across - 1) / 2);
+        double nearby = 0;
+        for (int d = 1; d <= k; ++d) nearby += step(columns, wrap - d) + step(columns, (wrap + d) % across);
+        nearby /= 2.0 * k;
+        (columns ? s.wrap_ratio_columns : s.wrap_ratio_rows) = nearby > 0 ? step(columns, wrap) / nearby : 0.0;
+        s.duplicated_border = s.duplicated_border || same(columns, 0, 1) || same(columns, across - 1, across - 2);
+    }
+    return s;
+}
+
+std::string SeamStatistics::json() const {
+    return fmt::format("{{\"cut_gradient_ratio\": {:.3f}, \"wrap_step_ratio_columns\": {:.3f}, "
+                       "\"wrap_step_ratio_rows\": {:.3f}, \"duplicated_border\": {}}}",
+                       cut_ratio,
+                       wrap_ratio_columns,
+                       wrap_ratio_rows,
+                       duplicated_border);
+}
+
 Image quantized_normals(const Image& normals, int bits) {
     TDF_CHECK(bits == 8 || bits == 16);
     const float max_value = bits == 16 ? 65535.0f : 255.0f;

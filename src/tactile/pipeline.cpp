@@ -168,6 +168,16 @@ HeightMap quilt_height_maps(const std::vector<HeightMap>& patches, const QuiltOp
     return out;
 }
 
+HeightMap optimize_height_maps(const std::vector<HeightMap>& patches, const HeightMap& initial,
+                               TextureOptimizationOptions options) {
+    std::vector<Image> images, masks;
+    for (const HeightMap& p : patches) images.push_back(p.height), masks.push_back(p.texture_mask);
+    options.tileable = initial.tileable;
+    HeightMap out = initial;
+    out.height = optimize_texture(images, masks, initial.height, options);
+    return out;
+}
+
 bool slopes_known(const HeightMap& map, Amplitude amplitude) {
     if (amplitude == Amplitude::Auto)
         amplitude = map.reference_scale_mm > 0 ? Amplitude::Reference : Amplitude::Physical;

@@ -172,6 +172,7 @@ private:
     std::vector<std::vector<std::uint8_t>> m_masks;  // per side set
     std::vector<std::size_t> m_mask_count;
     std::vector<Image> m_regions;  // per exemplar, empty = all
+    double m_coverage_needed = 1;
     Image m_canvas, m_seams;
     std::vector<std::uint8_t> m_filled;
     int m_channels = 0;
@@ -279,6 +280,7 @@ void Quilter::exclude_flat_candidates() {
     const std::size_t keep = std::min(all.size(), std::max<std::size_t>(64, all.size() / 50));
     std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(keep - 1), all.end(), std::greater<double>());
     const double needed = std::min(double(m_options.min_coverage), all[keep - 1]);
+    m_coverage_needed = needed;
     for (std::size_t i = 0; i < m_exemplars.size(); ++i) {
         m_exemplars[i].excluded.resize(coverage[i].size());
         for (std::size_t k = 0; k < coverage[i].size(); ++k)
@@ -618,6 +620,7 @@ QuiltResult Quilter::run() {
 
     QuiltResult result;
     result.stats.blocks_per_side = n;
+    result.stats.coverage_needed = m_coverage_needed;
     std::uint64_t per_block = 0;
     for (const Exemplar& e : m_exemplars) per_block += e.candidates();
     result.stats.candidates = per_block * std::uint64_t(n) * std::uint64_t(n);

@@ -44,6 +44,8 @@ Image sine_normals(int size, double wavelength, double amplitude) {
 struct Converted {
     std::vector<MaterialComparison> comparisons;
     HeightMap patch, result;
+    Image cuts;
+    SeamStatistics seams;
     float strength = 1;
 };
 Converted convert(const std::vector<std::string>& paths, int size, HeightInputOptions input_options = {}) {
@@ -58,8 +60,22 @@ Converted convert(const std::vector<std::string>& paths, int size, HeightInputOp
     const int side = std::min(patches[0].height.width(), patches[0].height.height());
     options.block = std::max(40, side / 8 / 8 * 8);  // --block auto
     c.patch = patches[0];
-    c.result = quilt_height_maps(patches, options);
+    QuiltStats stats;
+    c.result = quilt_height_maps(patches, options, &stats, &c.cuts);
     c.strength = auto_strength(patches[0], Amplitude::Auto);
+    auto misses = [&](const HeightMap& map) {  // --synthesis auto, as convert decides
+        const Image out = normal_map_from_height(map, Amplitude::Auto, c.strength);
+        std::vector<MaterialComparison> m;
+        for (std::size_t i = 0; i < paths.size(); ++i)
+            m.push_back(compare_material(scale_normal_slopes(steps[i].input_normals, c.strength), steps[i].region, out));
+        return material_misses(m);
+    };
+    const double quilt_misses = misses(c.result);
+    if (quilt_misses > 0) {
+        HeightMap optimized = optimize_height_maps(patches, c.result, TextureOptimizationOptions{});
+        if (misses(optimized) < quilt_misses) c.result = std::move(optimized);
+    }
+    c.seams = seam_statistics(c.result.height, c.cuts);
     const Image out = quantized_normals(normal_map_from_height(c.result, Amplitude::Auto, c.strength), 8);
     for (std::size_t i = 0; i < paths.size(); ++i)
         c.comparisons.push_back(
@@ -230,6 +246,50 @@ TEST(MaterialFlattening, LowReliefIsRescaledByStrengthAutoOrKeptWithSixteenBits)
     EXPECT_GT(std::abs(eight.tilt_ratio - 1.0), 0.1);
 }
 
+TEST(MaterialSeams, TheMeasureSeesAStepACutAndARepeatedBorder) {
+    Image h(64, 64, 1);  // periodic: no step across the wrap
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x)
+            h.at(x, y, 0) = float(std::sin(2 * kPi * 3 * x / 64) + std::cos(2 * kPi * 5 * y / 64) +
+                                  0.3 * std::sin(2 * kPi * (2 * x + 7 * y) / 64));
+    const SeamStatistics clean = seam_statistics(h, Image());
+    EXPECT_FALSE(clean.duplicated_border);
+    Image stepped = h;  // a ramp along x: the wrap from the last column to the first jumps
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) stepped.at(x, y, 0) += 0.05f * float(x);
+    const SeamStatistics wrap = seam_statistics(stepped, Image());
+    EXPECT_GT(wrap.wrap_ratio_columns, 2.0 * clean.wrap_ratio_columns);
+    EXPECT_NEAR(wrap.wrap_ratio_rows, clean.wrap_ratio_rows, 1e-6);  // float sums
+    Image cut = h, line(64, 64, 1);  // a step along column 30, marked as a cut
+    for (int y = 0; y < 64; ++y) {
+        line.at(30, y, 0) = 1.0f;
+        for (int x = 31; x < 64; ++x) cut.at(x, y, 0) += 1.0f;
+    }
+    EXPECT_GT(seam_statistics(cut, line).cut_ratio, 2.0);
+    Image repeated = h;
+    for (int x = 0; x < 64; ++x) repeated.at(x, 63, 0) = repeated.at(x, 62, 0);
+    EXPECT_TRUE(seam_statistics(repeated, Image()).duplicated_border);
+}
+
+TEST(MaterialSeams, ASeamlessMapPassesWhereverItsWrapFalls) {
+    // Periodic, with its relief strongest around column 0: the wrap crosses the roughest band.
+    // Every line is an ordinary line of the torus, so the wrap must not count as a seam,
+    // although its step is far above the mean step over all columns.
+    Image h(64, 64, 1);
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x)
+            h.at(x, y, 0) = float((1.0 + 0.8 * std::cos(2 * kPi * x / 64)) * std::sin(2 * kPi * (5 * x + 2 * y) / 64));
+    auto column_step = [&](int x) {
+        double sum = 0;
+        for (int y = 0; y < 64; ++y) sum += std::abs(h.at((x + 1) % 64, y, 0) - h.at(x, y, 0));
+        return sum / 64;
+    };
+    double mean = 0;
+    for (int x = 0; x < 63; ++x) mean += column_step(x) / 63;
+    EXPECT_GT(column_step(63) / mean, 1.4) << "the test needs a wrap in a rough band";
+    EXPECT_LT(seam_statistics(h, Image()).wrap_ratio_columns, 1.05);
+}
+
 TEST(MaterialSeams, CutsAndWrapAreNoRougherThanTheInterior) {
     HeightMap patch;
     patch.height = synthetic_texture(128, 14);
@@ -240,40 +300,14 @@ TEST(MaterialSeams, CutsAndWrapAreNoRougherThanTheInterior) {
     options.tileable = true, options.min_contrast = 0.5f, options.feather = 2;
     Image seams;
     const HeightMap quilt = quilt_height_maps({patch}, options, nullptr, &seams);
-    const Image& h = quilt.height;
-    const int w = h.width();
-    // Squared gradient (periodic forward differences) on cut pixels vs elsewhere.
-    double on = 0, off = 0, n_on = 0, n_off = 0;
-    for (int y = 0; y < w; ++y)
-        for (int x = 0; x < w; ++x) {
-            const double gx = h.at((x + 1) % w, y, 0) - h.at(x, y, 0), gy = h.at(x, (y + 1) % w, 0) - h.at(x, y, 0);
-            const double e = gx * gx + gy * gy;
-            if (seams.at(x, y, 0) != 0.0f)
-                on += e, n_on += 1;
-            else
-                off += e, n_off += 1;
-        }
-    ASSERT_GT(n_on, 1000.0);
-    const double cut_ratio = (on / n_on) / (off / n_off);
-    // Step across the wrap vs the mean interior step, columns and rows.
-    auto step = [&](bool columns, int i) {
-        double sum = 0;
-        for (int k = 0; k < w; ++k) {
-            const double d = columns ? h.at((i + 1) % w, k, 0) - h.at(i, k, 0) : h.at(k, (i + 1) % w, 0) - h.at(k, i, 0);
-            sum += std::abs(d);
-        }
-        return sum / w;
-    };
-    RecordProperty("cut_gradient_ratio", std::to_string(cut_ratio));
-    EXPECT_LT(cut_ratio, 1.2);
-    for (bool columns : {true, false}) {
-        double interior = 0;
-        for (int i = 0; i + 1 < w; ++i) interior += step(columns, i);
-        interior /= (w - 1);
-        const double wrap = step(columns, w - 1) / interior;
-        RecordProperty(columns ? "wrap_step_ratio_columns" : "wrap_step_ratio_rows", std::to_string(wrap));
-        EXPECT_LT(wrap, 1.2) << (columns ? "columns" : "rows");
-    }
+    const SeamStatistics measured = seam_statistics(quilt.height, seams);
+    RecordProperty("seams", measured.json());
+    EXPECT_LT(measured.cut_ratio, kSeamLimit);
+    EXPECT_GT(measured.cut_ratio, 0.0) << "no cut pixels measured";
+    EXPECT_LT(measured.wrap_ratio_columns, kSeamLimit);
+    EXPECT_LT(measured.wrap_ratio_rows, kSeamLimit);
+    EXPECT_FALSE(measured.duplicated_border);
+    const int w = quilt.height.width();
     // No duplicated border rows or columns in the tileable normal map.
     const Image normals = normal_map_from_height(quilt);
     auto same_line = [&](bool columns, int a, int b) {
@@ -343,11 +377,10 @@ TEST(MaterialEndToEnd, EverySharedSampleKeepsItsMaterial) {
                              "/tactile/gelsight_groove_scan/heightmap.tmd"})
         if (std::filesystem::exists(data + more)) inputs.push_back(data + more);
     // Known gaps (README "tdf tactile", measured): the yardstick's region of these inputs is a
-    // set of thin lines or rims (grooves, seams between fabric squares, the rims of corn
-    // kernels; 19-31 % of the input), which no block of a faithful synthesis fills. Their
-    // looser limits guard against regressions.
+    // set of thin lines (groove walls, seams between fabric squares; 19-23 % of the input),
+    // which no faithful synthesis fills. These looser limits only guard against regressions;
+    // they are not the bars.
     std::map<std::string, MaterialLimits> known;
-    known["Corn_00000"] = {0.85, 1.15, 0.08, 0.30};
     known["Fabric048_2K_Displacement"] = {0.35, 1.15, 0.22, 0.30};
     known["heightmap"] = {0.70, 1.15, 0.08, 0.30};
     for (const std::string& path : inputs) {
@@ -359,5 +392,11 @@ TEST(MaterialEndToEnd, EverySharedSampleKeepsItsMaterial) {
         const MaterialLimits limits = known.count(name) ? known[name] : MaterialLimits{};
         for (const std::string& problem : check_material(m, limits))
             ADD_FAILURE() << name << ": " << problem << " " << m.json();
+        // Goal 5 on real data: no visible cut lines, no wrap-around step, no repeated borders.
+        RecordProperty(name + "_seams", c.seams.json());
+        EXPECT_LT(c.seams.cut_ratio, kSeamLimit) << name << " " << c.seams.json();
+        EXPECT_LT(c.seams.wrap_ratio_columns, kSeamLimit) << name << " " << c.seams.json();
+        EXPECT_LT(c.seams.wrap_ratio_rows, kSeamLimit) << name << " " << c.seams.json();
+        EXPECT_FALSE(c.seams.duplicated_border) << name;
     }
 }

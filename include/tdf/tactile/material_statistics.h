@@ -92,6 +92,34 @@ struct MaterialLimits {
 };
 std::vector<std::string> check_material(const MaterialComparison& c, const MaterialLimits& limits = {});
 
+/// How far comparisons lie outside `limits`, summed over inputs: relative excess of the tilt
+/// ratio beyond its bounds + flat excess beyond the slack + distance beyond its bound. 0 when
+/// all are within (`tdf tactile convert --synthesis auto` keeps the synthesis that misses less).
+double material_misses(const std::vector<MaterialComparison>& comparisons, const MaterialLimits& limits = {});
+
+/// Are the seams of a synthesised height map invisible (issue 11, goal 5)? Measured on the
+/// heights with periodic forward differences (the map tiles).
+struct SeamStatistics {
+    /// Mean squared height gradient on the pixels of the boundary cuts (QuiltResult::seams,
+    /// where the cuts were even after a refinement moved them) / the same on all other pixels.
+    double cut_ratio = 0;
+    /// Mean |height step| across the wrap-around (last -> first column, last -> first row) /
+    /// the mean step between the kWrapBaselineLines neighbouring lines on either side of it
+    /// (same forward difference; those lines cross the same content as the wrap).
+    double wrap_ratio_columns = 0, wrap_ratio_rows = 0;
+    /// First and second (last and second-to-last) rows or columns are identical.
+    bool duplicated_border = false;
+    std::string json() const;
+};
+/// Seams count as invisible up to this ratio to the interior (issue 11, goal 5).
+constexpr double kSeamLimit = 1.2;
+/// Lines on either side of the wrap-around that its step is compared with. The nearest lines:
+/// a seam is a one-line step, and farther lines cross other content (on the shared samples,
+/// 0-8 % of ordinary lines step more than 1.2x their 2 + 2 neighbours, 0-19 % their 4 + 4).
+constexpr int kWrapBaselineLines = 2;
+/// `seams`: 1 channel, the map's size, non-zero on cut pixels (empty: cut_ratio stays 0).
+SeamStatistics seam_statistics(const Image& height, const Image& seams);
+
 /// Decoded normals as a file of `bits` (8 or 16) would give them back: the reference's
 /// floor((n * 0.5 + 0.5) * (2^bits - 1)) encoding, then decoded. What a reader of the written
 /// PNG sees (a 0.5 degree relief does not survive 8 bits).

@@ -5,6 +5,7 @@
 #include <tdf/tactile/height_input.h>
 #include <tdf/tactile/height_map.h>
 #include <tdf/tactile/quilting.h>
+#include <tdf/tactile/texture_optimization.h>
 
 #include <string>
 #include <vector>
@@ -66,6 +67,12 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
 /// tdf::Error naming mismatching inputs.
 HeightMap quilt_height_maps(const std::vector<HeightMap>& patches, const QuiltOptions& options,
                             QuiltStats* stats = nullptr, Image* seams = nullptr);
+
+/// Step 2b: texture optimisation (optimize_texture) of a synthesised map, e.g. the quilt of
+/// `patches`, towards their textured regions (texture masks). Keeps the map's size, pixel size
+/// and metadata; `options.tileable` follows the map.
+HeightMap optimize_height_maps(const std::vector<HeightMap>& patches, const HeightMap& initial,
+                               TextureOptimizationOptions options);
 
 enum class Amplitude {
     Auto,       ///< Reference when the map has a reference_scale_mm, else Physical

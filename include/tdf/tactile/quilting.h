@@ -59,6 +59,9 @@ struct QuiltStats {
     /// Mean over blocks of the average overlap error of all candidates: the expected boundary
     /// error of random placement, for comparison with mean_cut_error.
     double mean_random_error = 0;
+    /// The region coverage blocks needed: QuiltOptions::min_coverage, or less when too few
+    /// blocks reach it (a region of thin rims or lines, which whole blocks cannot fill).
+    double coverage_needed = 1;
 };
 
 struct QuiltResult {
