@@ -1,5 +1,6 @@
 #include <tdf/train/trainer.h>
 
+#include <tdf/train/asset_export.h>
 #include <tdf/train/part_gating.h>
 #include <tdf/train/part_label_head.h>
 #include <tdf/train/texture_fidelity.h>
@@ -1165,10 +1166,12 @@ QualityReport Trainer::evaluate_held_out() const {
     std::size_t values_fg = 0, values_full = 0;
     GBuffer g;
     std::vector<FieldOutputs> outputs;
-    for (int k = 0; k < cfg.held_out_views; ++k) {
-        const Camera camera = held_out_view(k);
+    // One view: albedo error against the input and seam jumps; `scored` views also count in the
+    // PSNR and the correlation (the turntable's only in its own seam measure).
+    const auto measure_view = [&](const Camera& camera, bool scored, SeamJump& albedo_jumps, SeamJump& input_jumps,
+                                  SeamJump& normal_jumps) {
         trace_and_evaluate(camera, g, outputs);
-        values_full += 3 * g.pixel_count();  // background: white in both, zero error (spec 5.2)
+        if (scored) values_full += 3 * g.pixel_count();  // background: white in both, zero error (spec 5.2)
         Image input_albedo(g.width, g.height, 3, 1.0f);
         std::size_t q = 0;
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
@@ -1176,6 +1179,7 @@ QualityReport Trainer::evaluate_held_out() const {
             const Vec3f target = sample_albedo(*m_target.material, mesh, g, p, true);
             std::copy(&target.x, &target.x + 3, input_albedo.data() + 3 * p);
             const Vec3f e = outputs[q++].albedo - target;
+            if (!scored) continue;
             for (int c = 0; c < 3; ++c) {
                 squared += double(e[c]) * e[c];
                 max_error = std::max(max_error, double(std::fabs(e[c])));
@@ -1183,11 +1187,25 @@ QualityReport Trainer::evaluate_held_out() const {
             values_fg += 3;
         }
         const LearnedImages learned = learned_images(camera, g, outputs);
-        alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
-        albedo_seams.add(g, learned.albedo, cfg.texture_size);
-        input_seams.add(g, input_albedo, cfg.texture_size);
-        normal_seams.add(g, learned.view_normals, cfg.texture_size);
+        if (scored) alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
+        albedo_jumps.add(g, learned.albedo, cfg.texture_size);
+        input_jumps.add(g, input_albedo, cfg.texture_size);
+        normal_jumps.add(g, learned.view_normals, cfg.texture_size);
+    };
+    for (int k = 0; k < cfg.held_out_views; ++k) measure_view(held_out_view(k), true, albedo_seams, input_seams, normal_seams);
+    SeamJump turntable_albedo, turntable_input, turntable_normal;
+    const TurntableFraming framing = turntable_framing(mesh);
+    for (int k = 0; k < cfg.turntable_views; ++k) {
+        Camera camera = Camera::orbit(0.0f, 360.0f * float(k) / float(cfg.turntable_views), framing.radius,
+                                      framing.fovy_degrees, cfg.turntable_resolution, cfg.turntable_resolution,
+                                      framing.target);
+        camera.near_plane = std::min(camera.near_plane, 0.01f * framing.radius);
+        measure_view(camera, false, turntable_albedo, turntable_input, turntable_normal);
     }
+    report.turntable_seam_jump_ratio_albedo = turntable_albedo.ratio();
+    report.turntable_seam_jump_ratio_normal = turntable_normal.ratio();
+    report.turntable_input_seam_jump_ratio_albedo = turntable_input.ratio();
+    report.turntable_seam_pairs = turntable_albedo.seam_pairs;
     report.seam_jump_ratio_albedo = albedo_seams.ratio();
     report.seam_jump_ratio_normal = normal_seams.ratio();
     report.seam_pairs = albedo_seams.seam_pairs;
@@ -1255,6 +1273,10 @@ Json QualityReport::to_json() const {
             {"seam_jump_ratio_normal", seam_jump_ratio_normal},
             {"input_seam_jump_ratio_albedo", input_seam_jump_ratio_albedo},
             {"seam_pixel_pairs", seam_pairs},
+            {"turntable_seam_jump_ratio_albedo", turntable_seam_jump_ratio_albedo},
+            {"turntable_seam_jump_ratio_normal", turntable_seam_jump_ratio_normal},
+            {"turntable_input_seam_jump_ratio_albedo", turntable_input_seam_jump_ratio_albedo},
+            {"turntable_seam_pixel_pairs", turntable_seam_pairs},
             {"held_out_views", views},
             {"held_out_patches", patches}};
 }

@@ -88,6 +88,12 @@ struct QualityReport {
     /// what the asset had before training.
     double input_seam_jump_ratio_albedo = 0;
     std::size_t seam_pairs = 0;
+    /// The same three ratios on the turntable's views (the measure: a turntable sees
+    /// every meridian, so a seam such as a sphere's u = 0/1 falls in it), and their seam pairs.
+    double turntable_seam_jump_ratio_albedo = 0;
+    double turntable_seam_jump_ratio_normal = 0;
+    double turntable_input_seam_jump_ratio_albedo = 0;
+    std::size_t turntable_seam_pairs = 0;
     int views = 0;
     int patches = 0;
     Json to_json() const;
