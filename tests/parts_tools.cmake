@@ -20,18 +20,8 @@ add_test(NAME PartsCli.TwoPartSphereWritesLabelMapMasksAndReport
          COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 256)
 set_tests_properties(PartsCli.TwoPartSphereWritesLabelMapMasksAndReport PROPERTIES LABELS unit
                      PASS_REGULAR_EXPRESSION "0 cap +42\\.[0-9]+ %.*1 base +57\\.[0-9]+ %.*wrote .*two_part_sphere_label_map.png")
-add_test(NAME PartsCli.SceneWithoutPartsFails
-         COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/pebble_sphere/scene.json -o ${_parts_out})
-set_tests_properties(PartsCli.SceneWithoutPartsFails PROPERTIES LABELS unit
-                     PASS_REGULAR_EXPRESSION "tdf parts: .*scene.json: the scene has no 'parts' section")
-add_test(NAME PartsCli.BadSelectFails
-         COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 64
-                 parts.source.kind=mesh)
-set_tests_properties(PartsCli.BadSelectFails PROPERTIES LABELS unit
-                     PASS_REGULAR_EXPRESSION "tdf parts: .*parts.list\\[0\\].select: '1' is not a region of the mesh source \\(found: 'base', 'cap'\\)")
-add_test(NAME PartsCli.KLargerThanColoursFails
-         COMMAND tdf parts ${PROJECT_SOURCE_DIR}/scenes/two_part_sphere/scene.json -o ${_parts_out} --size 64
-                 parts.source.kind=label_image parts.source.image=label_image.png parts.source.kind=colour
-                 albedo.source=constant parts.source.k=2)
-set_tests_properties(PartsCli.KLargerThanColoursFails PROPERTIES LABELS unit
-                     PASS_REGULAR_EXPRESSION "tdf parts: .*parts.source: k is 2 but the albedo has only 1 distinct colour")
+# Bad input: exit code 1 and one line each (a PASS_REGULAR_EXPRESSION alone ignores the exit code).
+add_test(NAME PartsCli.BadInputGivesOneLineAndExitCode1
+         COMMAND ${CMAKE_COMMAND} -DTDF=$<TARGET_FILE:tdf> -DSOURCE_DIR=${PROJECT_SOURCE_DIR}
+                 -DOUT_DIR=${PROJECT_BINARY_DIR}/test-output/parts_checks -P ${PROJECT_SOURCE_DIR}/tests/cli/parts_checks.cmake)
+set_tests_properties(PartsCli.BadInputGivesOneLineAndExitCode1 PROPERTIES LABELS unit)
