@@ -4,9 +4,10 @@ add_library(tdf_warnings INTERFACE)
 target_compile_options(tdf_warnings INTERFACE -Wall -Wextra -Wpedantic -Wshadow -Wno-unused-parameter
                        $<$<BOOL:${TDF_WERROR}>:-Werror>)
 if(TDF_SANITIZE)
-  target_compile_options(tdf_warnings INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer
-                         -fno-sanitize-recover=undefined)
-  target_link_options(tdf_warnings INTERFACE -fsanitize=address,undefined)
+  # Every target of the build (libraries, tdf, test suites, test helpers and tools) is
+  # instrumented, not only those that link tdf_warnings; UB aborts so a test fails on it.
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
 endif()
 
 if(TDF_FUZZ)

@@ -124,61 +124,73 @@ void check_png_chunks(std::FILE* file, const std::string& path, std::uint64_t fi
     std::fseek(file, start, SEEK_SET);
 }
 
-Image read_png(std::FILE* file, const std::string& path, std::uint64_t file_size, ImageMetadata* metadata) {
-    check_png_chunks(file, path, file_size);
-    PngErrorContext context{path, {}};
-    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler,
-                                             png_warning_handler);
-    png_infop info = png_create_info_struct(png);
-    Image image;
-    std::vector<png_bytep> rows;
+// The decoded rows of a PNG, filled by decode_png.
+struct PngPixels {
+    png_uint_32 width = 0, height = 0;
+    int channels = 0, bit_depth = 0;
     std::vector<unsigned char> buffer;
-    if (setjmp(png_jmpbuf(png))) {
-        png_destroy_read_struct(&png, &info, nullptr);
-        throw_error("cannot read PNG '{}': {}", path, context.message);
-    }
+    std::vector<png_bytep> rows;
+};
+
+// Every libpng call that can fail, under one setjmp. The function owns no object with a
+// destructor (those live in the caller), so png_longjmp skips none and clobbers nothing that
+// is read afterwards (gcc's -Wclobbered fired on read_png's strings at -O1). Returns false on a
+// libpng error (the message is in the error context); a size over the limits throws.
+bool decode_png(png_structp png, png_infop info, std::FILE* file, const std::string& path,
+                std::uint64_t file_size, PngPixels* pixels) {
+    if (setjmp(png_jmpbuf(png))) return false;
     png_init_io(png, file);
     png_read_info(png, info);
-    const png_uint_32 width = png_get_image_width(png, info);
-    const png_uint_32 height = png_get_image_height(png, info);
+    pixels->width = png_get_image_width(png, info);
+    pixels->height = png_get_image_height(png, info);
     const int color_type = png_get_color_type(png, info);
-    int bit_depth = png_get_bit_depth(png, info);
-    try {
-        check_image_size(
-            path, file_size, "PNG", width, height, double(png_get_rowbytes(png, info) + 1) * double(height));
-    } catch (...) {
-        png_destroy_read_struct(&png, &info, nullptr);
-        throw;
-    }
+    const int bit_depth = png_get_bit_depth(png, info);
+    check_image_size(path, file_size, "PNG", pixels->width, pixels->height,
+                     double(png_get_rowbytes(png, info) + 1) * double(pixels->height));
     if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
     if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
     if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
     if (bit_depth == 16) png_set_swap(png);  // little-endian host order
     png_read_update_info(png, info);
-    const int channels = png_get_channels(png, info);
-    bit_depth = png_get_bit_depth(png, info);
+    pixels->channels = png_get_channels(png, info);
+    pixels->bit_depth = png_get_bit_depth(png, info);
     const std::size_t row_bytes = png_get_rowbytes(png, info);
-    buffer.resize(row_bytes * height);
-    rows.resize(height);
-    for (png_uint_32 y = 0; y < height; ++y) rows[y] = buffer.data() + y * row_bytes;
-    png_read_image(png, rows.data());
+    pixels->buffer.resize(row_bytes * pixels->height);
+    pixels->rows.resize(pixels->height);
+    for (png_uint_32 y = 0; y < pixels->height; ++y) pixels->rows[y] = pixels->buffer.data() + y * row_bytes;
+    png_read_image(png, pixels->rows.data());
     png_read_end(png, info);  // `info` also collects text chunks that follow the pixels
+    return true;
+}
+
+Image read_png(std::FILE* file, const std::string& path, std::uint64_t file_size, ImageMetadata* metadata) {
+    check_png_chunks(file, path, file_size);
+    PngErrorContext context{path, {}};
+    struct ReadStruct {
+        png_structp png;
+        png_infop info;
+        ~ReadStruct() { png_destroy_read_struct(&png, &info, nullptr); }
+    } read{png_create_read_struct(PNG_LIBPNG_VER_STRING, &context, png_error_handler, png_warning_handler),
+           nullptr};
+    read.info = png_create_info_struct(read.png);
+    PngPixels pixels;
+    if (!decode_png(read.png, read.info, file, path, file_size, &pixels))
+        throw_error("cannot read PNG '{}': {}", path, context.message);
     if (metadata) {
         png_textp text = nullptr;
-        const int count = png_get_text(png, info, &text, nullptr);
+        const int count = png_get_text(read.png, read.info, &text, nullptr);
         for (int i = 0; i < count; ++i)
             (*metadata)[text[i].key] = text[i].text ? std::string(text[i].text) : std::string();
     }
-    png_destroy_read_struct(&png, &info, nullptr);
 
-    image = Image(int(width), int(height), channels);
+    Image image(int(pixels.width), int(pixels.height), pixels.channels);
     float* out = image.data();
-    const std::size_t count = std::size_t(width) * height * std::size_t(channels);
-    if (bit_depth == 16) {
-        const auto* in = reinterpret_cast<const std::uint16_t*>(buffer.data());
+    const std::size_t count = std::size_t(pixels.width) * pixels.height * std::size_t(pixels.channels);
+    if (pixels.bit_depth == 16) {
+        const auto* in = reinterpret_cast<const std::uint16_t*>(pixels.buffer.data());
         for (std::size_t i = 0; i < count; ++i) out[i] = float(in[i]) / 65535.0f;
     } else {
-        for (std::size_t i = 0; i < count; ++i) out[i] = float(buffer[i]) / 255.0f;
+        for (std::size_t i = 0; i < count; ++i) out[i] = float(pixels.buffer[i]) / 255.0f;
     }
     return image;
 }
@@ -201,15 +213,8 @@ void write_png_file(const std::string& path, const Image& image, int bits, Quant
                                PNG_COLOR_TYPE_RGBA};
     const std::size_t row_values = std::size_t(image.width()) * std::size_t(channels);
     std::vector<unsigned char> row(row_values * std::size_t(bits / 8));
-    if (setjmp(png_jmpbuf(png))) {
-        png_destroy_write_struct(&png, &info);
-        throw_error("cannot write PNG '{}': {}", path, context.message);
-    }
-    png_init_io(png, file.get());
-    png_set_IHDR(png, info, png_uint_32(image.width()), png_uint_32(image.height()), bits,
-                 color_types[channels], PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-                 PNG_FILTER_TYPE_DEFAULT);
-    png_set_compression_level(png, 6);
+    // Objects with destructors are made before setjmp: png_longjmp (a write error such as a full
+    // disk) returns there, and would skip the destructor of any object made after it.
     std::vector<png_text> texts;
     for (const auto& [key, value] : metadata) {
         png_text text{};
@@ -219,6 +224,15 @@ void write_png_file(const std::string& path, const Image& image, int bits, Quant
         text.text_length = value.size();
         texts.push_back(text);
     }
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        throw_error("cannot write PNG '{}': {}", path, context.message);
+    }
+    png_init_io(png, file.get());
+    png_set_IHDR(png, info, png_uint_32(image.width()), png_uint_32(image.height()), bits,
+                 color_types[channels], PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
+    png_set_compression_level(png, 6);
     if (!texts.empty()) png_set_text(png, info, texts.data(), int(texts.size()));
     png_write_info(png, info);
     const float max_value = bits == 16 ? 65535.0f : 255.0f;
