@@ -65,6 +65,13 @@ TurntableFraming turntable_framing(const TriangleMesh& mesh) {
     return framing;
 }
 
+Camera turntable_camera(const TurntableFraming& framing, int k, int views, int resolution) {
+    Camera camera = Camera::orbit(0.0f, 360.0f * float(k) / float(views), framing.radius, framing.fovy_degrees,
+                                  resolution, resolution, framing.target);
+    camera.near_plane = std::min(camera.near_plane, 0.01f * framing.radius);
+    return camera;
+}
+
 std::vector<std::string> write_turntable(const std::string& folder, const TriangleMesh& mesh, const EmbreeScene& scene,
                                          const BakedMaps& maps, int views, int resolution) {
     if (views <= 0) return {};
@@ -87,10 +94,7 @@ std::vector<std::string> write_turntable(const std::string& folder, const std::s
     const TurntableFraming framing = turntable_framing(mesh);
     const std::vector<Pass> passes = {Pass::Albedo, Pass::Lambertian, Pass::TactileNormal, Pass::ShadingNormal};
     for (int k = 0; k < views; ++k) {
-        const float azimuth = 360.0f * float(k) / float(views);
-        Camera camera = Camera::orbit(0.0f, azimuth, framing.radius, framing.fovy_degrees, resolution, resolution,
-                                      framing.target);
-        camera.near_plane = std::min(camera.near_plane, 0.01f * framing.radius);
+        const Camera camera = turntable_camera(framing, k, views, resolution);
         Light light;  // directional from the camera, visualizer ambient (spec 3.9)
         light.vector = camera.back;
         light.ambient = 0.1f;

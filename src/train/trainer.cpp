@@ -1195,13 +1195,9 @@ QualityReport Trainer::evaluate_held_out() const {
     for (int k = 0; k < cfg.held_out_views; ++k) measure_view(held_out_view(k), true, albedo_seams, input_seams, normal_seams);
     SeamJump turntable_albedo, turntable_input, turntable_normal;
     const TurntableFraming framing = turntable_framing(mesh);
-    for (int k = 0; k < cfg.turntable_views; ++k) {
-        Camera camera = Camera::orbit(0.0f, 360.0f * float(k) / float(cfg.turntable_views), framing.radius,
-                                      framing.fovy_degrees, cfg.turntable_resolution, cfg.turntable_resolution,
-                                      framing.target);
-        camera.near_plane = std::min(camera.near_plane, 0.01f * framing.radius);
-        measure_view(camera, false, turntable_albedo, turntable_input, turntable_normal);
-    }
+    for (int k = 0; k < cfg.turntable_views; ++k)
+        measure_view(turntable_camera(framing, k, cfg.turntable_views, cfg.turntable_resolution), false,
+                     turntable_albedo, turntable_input, turntable_normal);
     report.turntable_seam_jump_ratio_albedo = turntable_albedo.ratio();
     report.turntable_seam_jump_ratio_normal = turntable_normal.ratio();
     report.turntable_input_seam_jump_ratio_albedo = turntable_input.ratio();

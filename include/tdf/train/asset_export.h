@@ -58,5 +58,7 @@ struct TurntableFraming {
     float fovy_degrees = 50.0f;
 };
 TurntableFraming turntable_framing(const TriangleMesh& mesh);
+/// The k-th of `views` turntable cameras (resolution x resolution) for that framing.
+Camera turntable_camera(const TurntableFraming& framing, int k, int views, int resolution);
 
 }  // namespace tdf
