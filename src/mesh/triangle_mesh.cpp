@@ -45,6 +45,47 @@ Vec3f perpendicular(Vec3f n) {
 // The reference's clamped determinant (spec 3.3): |D| >= 1e-6, and D = 0 counts as negative.
 float clamp_determinant(float d) { return d > 0.0f ? std::max(d, 1e-6f) : std::min(d, -1e-6f); }
 
+int find_root(std::vector<int>& parent, int v) {
+    while (parent[std::size_t(v)] != v) v = parent[std::size_t(v)] = parent[std::size_t(parent[std::size_t(v)])];
+    return v;
+}
+
+// Joins, in `frame_of` (tangent vertex -> the tangent vertex whose frame it uses), the corners of
+// faces of the same handedness that meet at a position edge whose two UV corners both differ by
+// one translation. Every tangent vertex ends up pointing at the smallest of its group.
+void weld_translation_seams(const TriangleMesh& mesh, const std::vector<int>& face_side, std::vector<int>& frame_of) {
+    struct Side {
+        int face, corner_a, corner_b;  // corners (0..2) of the edge's smaller and larger position
+    };
+    std::map<std::pair<int, int>, std::vector<Side>> edges;
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            int ka = k, kb = (k + 1) % 3;
+            if (mesh.triangles[f][ka] == mesh.triangles[f][kb]) continue;
+            if (mesh.triangles[f][ka] > mesh.triangles[f][kb]) std::swap(ka, kb);
+            edges[{mesh.triangles[f][ka], mesh.triangles[f][kb]}].push_back({int(f), ka, kb});
+        }
+    const auto uv = [&](int face, int corner) { return mesh.uvs[std::size_t(mesh.uv_triangles[std::size_t(face)][corner])]; };
+    constexpr float kSameShift = 1e-5f;
+    for (const auto& [edge, sides] : edges)
+        for (std::size_t i = 0; i < sides.size(); ++i)
+            for (std::size_t j = i + 1; j < sides.size(); ++j) {
+                const Side& s = sides[i];
+                const Side& t = sides[j];
+                if (face_side[std::size_t(s.face)] != face_side[std::size_t(t.face)]) continue;
+                const Vec2f shift_a = uv(t.face, t.corner_a) - uv(s.face, s.corner_a);
+                const Vec2f shift_b = uv(t.face, t.corner_b) - uv(s.face, s.corner_b);
+                const bool moved = std::fabs(shift_a.x) + std::fabs(shift_a.y) > kSameShift;
+                if (!moved || std::fabs(shift_a.x - shift_b.x) + std::fabs(shift_a.y - shift_b.y) > kSameShift) continue;
+                for (const auto& [cs, ct] : {std::pair{s.corner_a, t.corner_a}, std::pair{s.corner_b, t.corner_b}}) {
+                    const int a = find_root(frame_of, mesh.tangent_triangles[std::size_t(s.face)][cs]);
+                    const int b = find_root(frame_of, mesh.tangent_triangles[std::size_t(t.face)][ct]);
+                    frame_of[std::size_t(std::max(a, b))] = std::min(a, b);
+                }
+            }
+    for (std::size_t v = 0; v < frame_of.size(); ++v) frame_of[v] = find_root(frame_of, int(v));
+}
+
 }  // namespace
 
 void compute_tangents(TriangleMesh& mesh, TangentMode mode) {
@@ -100,24 +141,32 @@ void compute_tangents(TriangleMesh& mesh, TangentMode mode) {
     }
 
     const std::size_t n = position_of.size();
+    // Seams across which the UV layout only moves (a sphere's u = 0 / u = 1 meridian, a tiled
+    // chart) continue the same tangent space: both sides share one frame there (the sum of all
+    // their faces), so a map that continues across the seam shades without a crease. Seams between
+    // charts turned or scaled against each other keep their own frames.
+    std::vector<int> frame_of(n);
+    for (std::size_t v = 0; v < n; ++v) frame_of[v] = int(v);
+    if (mode == TangentMode::Handed) weld_translation_seams(mesh, face_side, frame_of);
     std::vector<Vec3f> tangent_sum(n, Vec3f{0, 0, 0});
     std::vector<float> handedness_sum(n, 0.0f);
     std::vector<int> face_counts(n, 0);
     for (std::size_t f = 0; f < face_count; ++f)
         for (int k = 0; k < 3; ++k) {
-            const int tv = mesh.tangent_triangles[f][k];
-            tangent_sum[std::size_t(tv)] += face_tangent[f];
-            handedness_sum[std::size_t(tv)] += float(face_side[f]);
-            face_counts[std::size_t(tv)] += 1;
+            const std::size_t tv = std::size_t(frame_of[std::size_t(mesh.tangent_triangles[f][k])]);
+            tangent_sum[tv] += face_tangent[f];
+            handedness_sum[tv] += float(face_side[f]);
+            face_counts[tv] += 1;
         }
     mesh.tangents.resize(n);
     for (std::size_t v = 0; v < n; ++v) {
         const Vec3f normal = mesh.normals[std::size_t(position_of[v])];
-        Vec3f tangent = tangent_sum[v] / float(std::max(face_counts[v], 1));
+        const std::size_t frame = std::size_t(frame_of[v]);
+        Vec3f tangent = tangent_sum[frame] / float(std::max(face_counts[frame], 1));
         tangent = normalize_or_zero(tangent);
         tangent = normalize_or_zero(tangent - normal * dot(tangent, normal));
         if (mode == TangentMode::Handed && length_squared(tangent) == 0.0f) tangent = perpendicular(normal);
-        const float w = (mode == TangentMode::Reference || handedness_sum[v] >= 0.0f) ? 1.0f : -1.0f;
+        const float w = (mode == TangentMode::Reference || handedness_sum[frame] >= 0.0f) ? 1.0f : -1.0f;
         mesh.tangents[v] = Vec4f(tangent, w);
     }
 }

@@ -1,6 +1,7 @@
 #include <tdf/train/learned_maps.h>
 
 #include <tdf/core/error.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/core/parallel.h>
 
 #include <algorithm>
@@ -78,6 +79,10 @@ Image LearnedMaps::export_normal() const {
     return out;
 }
 
+namespace {
+const std::vector<float> kStepTent = {0.25f, 0.5f, 0.25f};
+}  // namespace
+
 void LearnedMaps::backward(Image& d_albedo, Image& d_normal, std::vector<float>& d_residual,
                            std::vector<FieldOutputGrads>* d_field) const {
     const TexelAtlas& a = *m_atlas;
@@ -107,9 +112,23 @@ void LearnedMaps::backward(Image& d_albedo, Image& d_normal, std::vector<float>&
     });
 }
 
-void LearnedMaps::jacobi_step(const Image& d_albedo, const Image& d_normal, float step) {
+void LearnedMaps::jacobi_step(Image& d_albedo, const Image& d_normal, float step, int smoothing) {
     const TexelAtlas& a = *m_atlas;
     TDF_CHECK(d_albedo.channels() == 4 && d_normal.channels() == 4);
+    // Views read the albedo through mip levels above 0, whose adjoint hands each 2x2 (4x4, ...)
+    // block of texels one gradient and one curvature: unsmoothed, the step would move blocks
+    // together and print their edges into level 0. Each pass of the symmetric [1 2 1] / 4 tent
+    // (zero outside the map: the gutter holds no gradient after backward()) spreads gradient and
+    // curvature alike, so the step stays the coverage-weighted mean of what nearby pixels ask.
+    // The normal map is left alone: tactile patches read it near level 0, and per-part gating
+    // (README "Multi-part textures") must not reach across a part's boundary.
+    for (int pass = 0; pass < smoothing; ++pass) {
+        if (m_step_scratch.width() != d_albedo.width() || m_step_scratch.height() != d_albedo.height() ||
+            m_step_scratch.channels() != d_albedo.channels())
+            m_step_scratch = Image(d_albedo.width(), d_albedo.height(), d_albedo.channels());
+        convolve_separable(d_albedo, m_step_scratch, kStepTent, Addressing::Border);
+        std::swap(d_albedo, m_step_scratch);
+    }
     // Damping: a texel seen by a tenth of the typical hit moves by at most about a tenth as much.
     const auto damping = [&](const Image& d) {
         double sum = 0;

@@ -50,6 +50,7 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.fit_texels = fr.get("fit_texels", c.fit_texels);
     c.residual_optimizer = fr.get("residual_optimizer", c.residual_optimizer);
     c.residual_step = fr.get("residual_step", c.residual_step);
+    c.residual_step_smoothing = fr.get("residual_step_smoothing", c.residual_step_smoothing);
     fr.check_all_read();
     if (c.evaluation == FieldEvaluation::Pixel && !schedule.is_string()) {
         // Pixel evaluation without a schedule named: the reference's losses.
@@ -167,6 +168,8 @@ void RunConfig::validate(const std::string& source) const {
         throw_error("{}: field.residual_optimizer must be \"jacobi\" or \"adam\", got '{}'", source, residual_optimizer);
     if (!(residual_step > 0.0f && residual_step <= 1.0f))
         throw_error("{}: field.residual_step must be in (0, 1], got {}", source, residual_step);
+    if (residual_step_smoothing < 0 || residual_step_smoothing > 8)
+        throw_error("{}: field.residual_step_smoothing must be in [0, 8], got {}", source, residual_step_smoothing);
     if (visual_guidance_loss != "mse" && visual_guidance_loss != "l1_structural")
         throw_error("{}: optimize.visual_guidance_loss must be \"mse\" or \"l1_structural\", got '{}'", source,
                     visual_guidance_loss);
@@ -216,7 +219,7 @@ Json RunConfig::to_json() const {
                   {"refine_grid", refine_grid},
                   {"fit_texels", fit_texels},
                   {"residual_optimizer", residual_optimizer},
-                  {"residual_step", residual_step}};
+                  {"residual_step", residual_step}, {"residual_step_smoothing", residual_step_smoothing}};
     j["tactile_layout"] = {{"mode", tactile_layout == TactileLayout::Atlas ? "atlas" : "physical"},
                            {"mm_per_unit", mm_per_unit},
                            {"mm_per_pixel", tactile_mm_per_pixel}};

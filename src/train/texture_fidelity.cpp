@@ -3,6 +3,7 @@
 #include <tdf/core/error.h>
 #include <tdf/core/vec.h>
 #include <tdf/core/image_ops.h>
+#include <tdf/mesh/triangle_mesh.h>
 #include <tdf/render/gbuffer.h>
 
 #include <algorithm>
@@ -152,32 +153,96 @@ Json TextureFidelity::to_json() const {
             {"flat_fraction", flat_fraction}, {"coverage", coverage}};
 }
 
-void SeamJump::add(const GBuffer& g, const Image& image, int map_size) {
+MeshSeams::MeshSeams(const TriangleMesh& mesh) {
+    // Each position edge (a, b) with a < b, seen from every triangle that has it: the triangle and
+    // the UV indices of a and b there.
+    struct Side {
+        int triangle;
+        int uv_a, uv_b;
+    };
+    std::unordered_map<std::uint64_t, std::vector<Side>> sides;
+    const auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); };
+    const bool has_uvs = mesh.has_uvs();
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            int a = mesh.triangles[f][k], b = mesh.triangles[f][(k + 1) % 3];
+            int ua = has_uvs ? mesh.uv_triangles[f][k] : a, ub = has_uvs ? mesh.uv_triangles[f][(k + 1) % 3] : b;
+            if (a == b) continue;
+            if (a > b) std::swap(a, b), std::swap(ua, ub);
+            sides[key(a, b)].push_back({int(f), ua, ub});
+        }
+    // UV indices can differ while the UVs are equal (a file that repeats a vt line): compare values.
+    const auto same_uv = [&](int i, int j) { return !has_uvs || i == j || (mesh.uvs[std::size_t(i)].x == mesh.uvs[std::size_t(j)].x && mesh.uvs[std::size_t(i)].y == mesh.uvs[std::size_t(j)].y); };
+    for (const auto& [edge, list] : sides)
+        for (std::size_t i = 0; i < list.size(); ++i)
+            for (std::size_t j = i + 1; j < list.size(); ++j) {
+                const bool a_same = same_uv(list[i].uv_a, list[j].uv_a), b_same = same_uv(list[i].uv_b, list[j].uv_b);
+                const EdgeContinuity kind = a_same && b_same ? EdgeContinuity::Continuous
+                                            : a_same || b_same ? EdgeContinuity::Cone
+                                                               : EdgeContinuity::Seam;
+                const int lo = std::min(list[i].triangle, list[j].triangle), hi = std::max(list[i].triangle, list[j].triangle);
+                m_edges[key(lo, hi)] = kind;
+                m_seam_edges += kind == EdgeContinuity::Seam ? 1 : 0;
+                m_cone_edges += kind == EdgeContinuity::Cone ? 1 : 0;
+            }
+}
+
+EdgeContinuity MeshSeams::between(int triangle_a, int triangle_b) const {
+    if (triangle_a == triangle_b) return EdgeContinuity::Same;
+    const int lo = std::min(triangle_a, triangle_b), hi = std::max(triangle_a, triangle_b);
+    const auto it = m_edges.find((std::uint64_t(std::uint32_t(lo)) << 32) | std::uint32_t(hi));
+    return it == m_edges.end() ? EdgeContinuity::Apart : it->second;
+}
+
+void SeamJump::add(const GBuffer& g, const Image& image, const MeshSeams& seams) {
     const int c = image.channels();
-    const float texel = 1.0f / float(std::max(map_size, 1));
-    const auto pair = [&](std::size_t a, std::size_t b, Vec2f step) {
-        if (g.mask[a] <= 0.0f || g.mask[b] <= 0.0f) return;
-        // Occlusion edges (the handle over the body) are not seams: skip pairs at depth jumps.
-        if (std::fabs(g.depth[a] - g.depth[b]) > 0.01f * std::max(g.depth[a], g.depth[b])) return;
-        const Vec2f d = g.uv[b] - g.uv[a] - step;
-        const float expected = 8.0f * std::sqrt(step.x * step.x + step.y * step.y) + 2.0f * texel;
+    // What lies between pixels a and b, or Apart when they are not a surface pair: background, an
+    // occlusion edge (a depth jump of more than 1 %, like the handle over the body) or triangles
+    // that share no edge.
+    const auto continuity = [&](std::size_t a, std::size_t b) {
+        if (g.mask[a] <= 0.0f || g.mask[b] <= 0.0f) return EdgeContinuity::Apart;
+        if (std::fabs(g.depth[a] - g.depth[b]) > 0.01f * std::max(g.depth[a], g.depth[b])) return EdgeContinuity::Apart;
+        return seams.between(g.triangle[a], g.triangle[b]);
+    };
+    const auto inside = [&](std::size_t a, std::size_t b) {
+        const EdgeContinuity k = continuity(a, b);
+        return k == EdgeContinuity::Same || k == EdgeContinuity::Continuous;
+    };
+    const auto jump = [&](std::size_t a, std::size_t b) {
         double diff = 0;
         for (int k = 0; k < c; ++k)
             diff += std::fabs(double(image.data()[b * std::size_t(c) + std::size_t(k)]) -
                               image.data()[a * std::size_t(c) + std::size_t(k)]);
-        if (std::sqrt(d.x * d.x + d.y * d.y) > expected) {
-            seam_sum += diff;
+        return diff;
+    };
+    // The pair (p0 + 2 step, p0 + 3 step) crosses the edge; its baseline is the mean of the two steps
+    // before and the two after along the same line, all inside one chart.
+    const auto measure = [&](std::size_t p0, std::size_t step) {
+        const std::size_t a = p0 + 2 * step, b = a + step;
+        const EdgeContinuity kind = continuity(a, b);
+        if (kind != EdgeContinuity::Seam && kind != EdgeContinuity::Cone) return;
+        double baseline = 0;
+        for (int s = 0; s < 5; ++s) {
+            if (s == 2) continue;
+            const std::size_t u = p0 + std::size_t(s) * step;
+            if (!inside(u, u + step)) return;
+            baseline += 0.25 * jump(u, u + step);
+        }
+        if (kind == EdgeContinuity::Seam) {
+            seam_sum += jump(a, b);
+            interior_sum += baseline;
             ++seam_pairs;
         } else {
-            interior_sum += diff;
-            ++interior_pairs;
+            cone_sum += jump(a, b);
+            cone_interior_sum += baseline;
+            ++cone_pairs;
         }
     };
     for (int y = 0; y < g.height; ++y)
         for (int x = 0; x < g.width; ++x) {
             const std::size_t i = g.index(x, y);
-            if (x + 1 < g.width) pair(i, i + 1, g.duv_dx[i]);
-            if (y + 1 < g.height) pair(i, i + std::size_t(g.width), g.duv_dy[i]);
+            if (x + 5 < g.width) measure(i, 1);
+            if (y + 5 < g.height) measure(i, std::size_t(g.width));
         }
 }
 

@@ -1076,7 +1076,8 @@ void Trainer::update(int i) {
     }
     (void)i;
     if (m_config.residual_optimizer == "jacobi")
-        m_maps->jacobi_step(m_batch->albedo_gradient.level0(), m_batch->normal_gradient.level0(), m_config.residual_step);
+        m_maps->jacobi_step(m_batch->albedo_gradient.level0(), m_batch->normal_gradient.level0(), m_config.residual_step,
+                            m_config.residual_step_smoothing);
     else
         m_residual_adam->step(m_maps->residual(), m_residual_gradient);
     if (m_config.refine_grid) {
@@ -1162,23 +1163,34 @@ QualityReport Trainer::evaluate_held_out() const {
     const TriangleMesh& mesh = *m_target.mesh;
     QualityReport report;
     double squared = 0, max_error = 0, alignment = 0;
-    SeamJump albedo_seams, normal_seams, input_seams;
+    const MeshSeams mesh_seams(mesh);
     std::size_t values_fg = 0, values_full = 0;
     GBuffer g;
-    std::vector<FieldOutputs> outputs;
+    std::vector<FieldOutputs> outputs, inputs;
+    // The seam measures of one view's learned maps and of the input's own (its albedo through its
+    // UVs; in texture space also the tactile map laid over the atlas, sampled as the learned map is).
+    struct ViewSeams {
+        SeamJump albedo, normal, input_albedo, input_normal;
+    };
     // One view: albedo error against the input and seam jumps; `scored` views also count in the
     // PSNR and the correlation (the turntable's only in its own seam measure).
-    const auto measure_view = [&](const Camera& camera, bool scored, SeamJump& albedo_jumps, SeamJump& input_jumps,
-                                  SeamJump& normal_jumps) {
+    const auto measure_view = [&](const Camera& camera, bool scored, ViewSeams& seams) {
         trace_and_evaluate(camera, g, outputs);
         if (scored) values_full += 3 * g.pixel_count();  // background: white in both, zero error (spec 5.2)
-        Image input_albedo(g.width, g.height, 3, 1.0f);
+        inputs.resize(outputs.size());
         std::size_t q = 0;
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] <= 0.0f) continue;
-            const Vec3f target = sample_albedo(*m_target.material, mesh, g, p, true);
-            std::copy(&target.x, &target.x + 3, input_albedo.data() + 3 * p);
-            const Vec3f e = outputs[q++].albedo - target;
+            FieldOutputs& input = inputs[q];
+            input.albedo = sample_albedo(*m_target.material, mesh, g, p, true);
+            input.normal = Vec3f{0, 0, 1};
+            if (texture_space()) {
+                TrilinearTaps taps;
+                m_tactile_target_texture.taps(g.uv[p], m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]),
+                                              -1, taps);
+                input.normal = safe_normalize(gather3(m_tactile_target_texture, taps));
+            }
+            const Vec3f e = outputs[q++].albedo - input.albedo;
             if (!scored) continue;
             for (int c = 0; c < 3; ++c) {
                 squared += double(e[c]) * e[c];
@@ -1187,25 +1199,31 @@ QualityReport Trainer::evaluate_held_out() const {
             values_fg += 3;
         }
         const LearnedImages learned = learned_images(camera, g, outputs);
+        const LearnedImages input = learned_images(camera, g, inputs);
         if (scored) alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
-        albedo_jumps.add(g, learned.albedo, cfg.texture_size);
-        input_jumps.add(g, input_albedo, cfg.texture_size);
-        normal_jumps.add(g, learned.view_normals, cfg.texture_size);
+        seams.albedo.add(g, learned.albedo, mesh_seams);
+        seams.input_albedo.add(g, input.albedo, mesh_seams);
+        seams.normal.add(g, learned.view_normals, mesh_seams);
+        seams.input_normal.add(g, input.view_normals, mesh_seams);
     };
-    for (int k = 0; k < cfg.held_out_views; ++k) measure_view(held_out_view(k), true, albedo_seams, input_seams, normal_seams);
-    SeamJump turntable_albedo, turntable_input, turntable_normal;
+    ViewSeams held_out;
+    for (int k = 0; k < cfg.held_out_views; ++k) measure_view(held_out_view(k), true, held_out);
+    ViewSeams turntable;
     const TurntableFraming framing = turntable_framing(mesh);
     for (int k = 0; k < cfg.turntable_views; ++k)
-        measure_view(turntable_camera(framing, k, cfg.turntable_views, cfg.turntable_resolution), false,
-                     turntable_albedo, turntable_input, turntable_normal);
-    report.turntable_seam_jump_ratio_albedo = turntable_albedo.ratio();
-    report.turntable_seam_jump_ratio_normal = turntable_normal.ratio();
-    report.turntable_input_seam_jump_ratio_albedo = turntable_input.ratio();
-    report.turntable_seam_pairs = turntable_albedo.seam_pairs;
-    report.seam_jump_ratio_albedo = albedo_seams.ratio();
-    report.seam_jump_ratio_normal = normal_seams.ratio();
-    report.seam_pairs = albedo_seams.seam_pairs;
-    report.input_seam_jump_ratio_albedo = input_seams.ratio();
+        measure_view(turntable_camera(framing, k, cfg.turntable_views, cfg.turntable_resolution), false, turntable);
+    report.turntable_seam_jump_ratio_albedo = turntable.albedo.ratio();
+    report.turntable_seam_jump_ratio_normal = turntable.normal.ratio();
+    report.turntable_input_seam_jump_ratio_albedo = turntable.input_albedo.ratio();
+    report.turntable_input_seam_jump_ratio_normal = turntable.input_normal.ratio();
+    report.turntable_cone_jump_ratio_albedo = turntable.albedo.cone_ratio();
+    report.turntable_input_cone_jump_ratio_albedo = turntable.input_albedo.cone_ratio();
+    report.turntable_seam_pairs = turntable.albedo.seam_pairs;
+    report.turntable_cone_pairs = turntable.albedo.cone_pairs;
+    report.seam_jump_ratio_albedo = held_out.albedo.ratio();
+    report.seam_jump_ratio_normal = held_out.normal.ratio();
+    report.seam_pairs = held_out.albedo.seam_pairs;
+    report.input_seam_jump_ratio_albedo = held_out.input_albedo.ratio();
     const auto psnr = [](double sum, std::size_t count) {
         if (count == 0) return 0.0;
         const double mse = sum / double(count);
@@ -1273,6 +1291,10 @@ Json QualityReport::to_json() const {
             {"turntable_seam_jump_ratio_normal", turntable_seam_jump_ratio_normal},
             {"turntable_input_seam_jump_ratio_albedo", turntable_input_seam_jump_ratio_albedo},
             {"turntable_seam_pixel_pairs", turntable_seam_pairs},
+            {"turntable_input_seam_jump_ratio_normal", turntable_input_seam_jump_ratio_normal},
+            {"turntable_cone_jump_ratio_albedo", turntable_cone_jump_ratio_albedo},
+            {"turntable_input_cone_jump_ratio_albedo", turntable_input_cone_jump_ratio_albedo},
+            {"turntable_cone_pixel_pairs", turntable_cone_pairs},
             {"held_out_views", views},
             {"held_out_patches", patches}};
 }

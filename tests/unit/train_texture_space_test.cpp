@@ -168,8 +168,11 @@ std::string half_flat_scene() {
 }
 
 TEST(TextureSpace, RefinementAlignsColourWithTheReliefAndKeepsTheInputsColours) {
-    // Goal 2 on the shipped pebble sphere: 30 matching + 20 refinement iterations, default guidance.
-    TrainingRun run = make_run({"optimize.iterations=50"}, "relief_shading");
+    // Goals 2 and 4 on the shipped pebble sphere: 30 matching + 70 refinement iterations of
+    // 256 px views, default guidance. The seam measure needs refinement to settle and views not
+    // far below the default's 512 px: 128 px views after 20 iterations measure 1.2-1.4, after 70
+    // 1.14-1.28 depending on the seed; the default run measures 1.03-1.05 (seeds 0 and 5).
+    TrainingRun run = make_run({"optimize.iterations=100", "optimize.resolution=256"}, "relief_shading");
     while (run.trainer->iteration() < run.config.iterations) run.trainer->step();
     const BakedMaps maps = run.trainer->export_maps();
     const TextureFidelity f =
@@ -181,14 +184,26 @@ TEST(TextureSpace, RefinementAlignsColourWithTheReliefAndKeepsTheInputsColours) 
     EXPECT_GE(f.albedo_psnr_lowpass, 32.0);
     EXPECT_GE(held_out.colour_geometry_correlation, 0.5);
     EXPECT_GE(f.normal_mean_cos, 0.98);
-    // Goal 4 as far as the optimizer owns it: the turntable crosses the sphere's u = 0/1 seam, and
-    // the learned albedo jumps across it at most 1.2x as much as the input texture itself does
-    // (the input's own ratio, about 1.36, is the asset's and not the optimizer's).
-    std::printf("turntable seams: learned %.3f, input %.3f, normals %.3f over %zu pairs\n",
+    // Goal 4: the turntable crosses the sphere's u = 0/1 seam; the jump across it is at most 1.2x
+    // the steps beside it, for the learned albedo and the learned normals as the viewer sees them.
+    std::printf("turntable seams: learned %.3f (input %.3f), normals %.3f (input %.3f) over %zu pairs\n",
                 held_out.turntable_seam_jump_ratio_albedo, held_out.turntable_input_seam_jump_ratio_albedo,
-                held_out.turntable_seam_jump_ratio_normal, held_out.turntable_seam_pairs);
-    ASSERT_GT(held_out.turntable_seam_pairs, 100u);
-    EXPECT_LE(held_out.turntable_seam_jump_ratio_albedo, 1.2 * held_out.turntable_input_seam_jump_ratio_albedo);
+                held_out.turntable_seam_jump_ratio_normal, held_out.turntable_input_seam_jump_ratio_normal,
+                held_out.turntable_seam_pairs);
+    ASSERT_GT(held_out.turntable_seam_pairs, 500u);
+    EXPECT_LE(held_out.turntable_seam_jump_ratio_albedo, 1.2);
+    EXPECT_LE(held_out.turntable_seam_jump_ratio_normal, 1.2);
+    // No 2x2 blocks: views read coarse mip levels, whose adjoint moves blocks of texels together
+    // unless the step is smoothed (field.residual_step_smoothing). Steps across block edges (odd
+    // columns) against steps inside blocks (even columns): 1.9 unsmoothed, 1.1 smoothed.
+    double inside = 0, across = 0;
+    const Image& a = maps.albedo;
+    for (int y = a.height() / 4; y < 3 * a.height() / 4; ++y)
+        for (int x = 0; x + 1 < a.width(); ++x)
+            for (int c = 0; c < 3; ++c)
+                (x % 2 == 0 ? inside : across) += std::fabs(double(a.at(x + 1, y, c)) - a.at(x, y, c));
+    std::printf("albedo steps across 2x2 block edges / inside blocks: %.3f\n", across / inside);
+    EXPECT_LE(across / inside, 1.25);
 }
 
 TEST(TextureSpace, RefinementKeepsPrintsAndAddsNothingWhereTheReliefIsFlat) {

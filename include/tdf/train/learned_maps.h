@@ -53,7 +53,9 @@ public:
     /// footprint (channel 3), gutter already folded by backward(). Each texel with curvature
     /// moves by -step x gradient / (curvature + damping): the coverage-weighted mean of what its
     /// pixels ask for. Texels not seen this iteration do not move (no momentum: no speckle).
-    void jacobi_step(const Image& d_albedo, const Image& d_normal, float step);
+    /// `smoothing` passes of a [1 2 1] / 4 tent over the albedo's gradient and curvature first
+    /// (`d_albedo` is modified) keep mip-level gradients from printing their blocks into level 0.
+    void jacobi_step(Image& d_albedo, const Image& d_normal, float step, int smoothing);
     /// dL/d(field parameters) for per-texel output gradients from backward(), using the encodings
     /// of the last evaluate_field() (parameters unchanged since).
     void field_backward(const TextureField& field, const std::vector<FieldOutputGrads>& d_field,
@@ -67,6 +69,7 @@ private:
     std::vector<FieldOutputs> m_field_outputs;
     FieldCache m_cache;
     Image m_albedo_level0, m_normal_level0;
+    Image m_step_scratch;  ///< jacobi_step's smoothing buffer (kept: no allocation per iteration)
     MipTexture m_albedo, m_normal;
 };
 

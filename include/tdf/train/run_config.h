@@ -63,6 +63,10 @@ struct RunConfig {
     /// seen do not move; "adam": Adam at `learning_rate` (per-texel sign-like steps: speckle).
     std::string residual_optimizer = "jacobi";
     float residual_step = 0.5f;
+    /// Passes of a [1 2 1] / 4 tent over the Jacobi step's albedo gradient and curvature
+    /// ("field.residual_step_smoothing", 0-8): views that read coarse mip levels would otherwise
+    /// move 2x2 blocks of texels together and leave their edges in the exported map.
+    int residual_step_smoothing = 2;
     /// The visual guidance loss: "l1_structural" (reference: L1 + structural term, spec 5.4) or
     /// "mse" (texture schedule default: a squared error, whose gradient says how far each
     /// pixel is from its target, which the Jacobi step needs).

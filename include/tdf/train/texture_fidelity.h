@@ -7,11 +7,13 @@
 #include <tdf/core/config.h>
 
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 namespace tdf {
 
 struct GBuffer;
+struct TriangleMesh;
 
 struct TextureFidelity {
     double albedo_psnr = 0;          ///< dB, full band
@@ -37,19 +39,43 @@ TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albed
                                          const Image& normal_target, const std::vector<std::uint8_t>& covered,
                                          float lowpass_sigma = 2.0f);
 
-/// Seams as a viewer sees them (issue 10 goal 4): the mean |difference| (summed over channels)
-/// of an image between horizontally or vertically neighbouring surface pixels of a traced view,
-/// split into pairs whose UVs jump (they differ from what the ray differentials predict by more
-/// than 8 pixels' worth plus two texels of a `map_size` map: the two pixels lie on different
-/// charts) and pairs inside a chart; pairs across a depth jump of more than 1 % (occlusion
-/// edges) count as neither. Accumulates over views; `ratio()` is seam / interior.
+/// How the surface continues between two triangles of a mesh, for measuring seams where the
+/// viewer sees them (issue 10 goal 4). Two triangles that share a position edge are either
+/// - `Continuous`: they also share both edge corners' UVs (one chart),
+/// - `Seam`: both shared corners have other UVs on each side (a chart boundary, like a sphere's
+///   u = 0/1 meridian or the cut between two atlas charts), or
+/// - `Cone`: one shared corner keeps its UV and the other does not (a UV singularity, such as the
+///   fan of a sphere's pole, where one surface point has a different UV in every triangle);
+/// a triangle with itself is `Same`, and triangles that share no edge are `Apart`.
+enum class EdgeContinuity { Same, Continuous, Seam, Cone, Apart };
+class MeshSeams {
+public:
+    explicit MeshSeams(const TriangleMesh& mesh);
+    EdgeContinuity between(int triangle_a, int triangle_b) const;
+    std::size_t seam_edges() const { return m_seam_edges; }
+    std::size_t cone_edges() const { return m_cone_edges; }
+
+private:
+    std::unordered_map<std::uint64_t, EdgeContinuity> m_edges;  ///< key: (min triangle, max triangle)
+    std::size_t m_seam_edges = 0, m_cone_edges = 0;
+};
+
+/// Seams as a viewer sees them (issue 10 goal 4), in a traced view: for every pair of
+/// horizontally or vertically neighbouring surface pixels whose triangles meet at a `Seam` edge
+/// (MeshSeams), the |difference| of the image (summed over channels) across it, against the mean
+/// |difference| of the two steps before and the two after it along the same line, all inside one
+/// chart (pairs without those four are skipped). The local baseline makes the measure compare a
+/// seam with the surface beside it at the same distance, direction and foreshortening (a seam
+/// seen near the silhouette spans many texels per pixel, as do its neighbours). Pairs across a
+/// `Cone` edge are measured the same way but kept apart: there even the input's own texture changes
+/// with the UV direction. Pairs across a depth jump of more than 1 % (occlusion edges) count
+/// nowhere. Accumulates over views; `ratio()` is seam / baseline.
 struct SeamJump {
-    double seam_sum = 0, interior_sum = 0;
-    std::size_t seam_pairs = 0, interior_pairs = 0;
-    void add(const GBuffer& g, const Image& image, int map_size);
-    double seam() const { return seam_pairs ? seam_sum / double(seam_pairs) : 0.0; }
-    double interior() const { return interior_pairs ? interior_sum / double(interior_pairs) : 0.0; }
-    double ratio() const { return interior() > 0 ? seam() / interior() : 0.0; }
+    double seam_sum = 0, interior_sum = 0, cone_sum = 0, cone_interior_sum = 0;
+    std::size_t seam_pairs = 0, cone_pairs = 0;
+    void add(const GBuffer& g, const Image& image, const MeshSeams& seams);
+    double ratio() const { return interior_sum > 0 ? seam_sum / interior_sum : 0.0; }
+    double cone_ratio() const { return cone_interior_sum > 0 ? cone_sum / cone_interior_sum : 0.0; }
 };
 
 }  // namespace tdf

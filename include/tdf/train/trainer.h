@@ -81,7 +81,8 @@ struct QualityReport {
     /// The same for the target normals at those hits: the floor that sampling leaves.
     double target_tilt_distance = 0;
     /// Seams (issue 10 goal 4): mean colour / view-space normal jump between neighbouring pixels
-    /// across UV seams over the jump inside charts, on the held-out views (SeamJump).
+    /// across UV seams (chart boundaries of the mesh) over the jump inside charts, on the
+    /// held-out views (SeamJump).
     double seam_jump_ratio_albedo = 0;
     double seam_jump_ratio_normal = 0;
     /// The same measure of the input's own albedo (its texture through its UVs) on those views:
@@ -93,7 +94,13 @@ struct QualityReport {
     double turntable_seam_jump_ratio_albedo = 0;
     double turntable_seam_jump_ratio_normal = 0;
     double turntable_input_seam_jump_ratio_albedo = 0;
+    double turntable_input_seam_jump_ratio_normal = 0;  ///< the tactile target laid over the atlas
     std::size_t turntable_seam_pairs = 0;
+    /// Jumps across UV cones (a pole's fan, SeamJump) over the interior, learned and input: reported
+    /// apart from seams because the input's own texture changes with the UV direction there.
+    double turntable_cone_jump_ratio_albedo = 0;
+    double turntable_input_cone_jump_ratio_albedo = 0;
+    std::size_t turntable_cone_pairs = 0;
     int views = 0;
     int patches = 0;
     Json to_json() const;
