@@ -561,7 +561,7 @@ Command register_tactile(CLI::App& root) {
                      "thin for whole blocks)")
         ->check(CLI::IsMember({"auto", "quilt", "optimize"}))
         ->capture_default_str();
-    s->convert->add_option("--optimize-iterations", s->optimization.iterations, "EM iterations per window size")
+    s->convert->add_option("--optimize-iterations", s->optimization.iterations, "EM iterations per window side (one per side of --optimize-windows; later sides repeat the last)")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
     s->convert->add_option("--optimize-windows", s->optimization.windows, "window sides, coarse to fine")
