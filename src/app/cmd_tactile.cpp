@@ -427,6 +427,7 @@ void run_convert(const State& s) {
             if (steps) write_height_preview(step_path("6_quilted_initial.png"), result.height);
             TextureOptimizationOptions o = s.optimization;
             o.seed = quilt_options.seed;
+            o.min_coverage = quilt_options.min_coverage;  // one --min-coverage for blocks and windows
             HeightMap optimized = optimize_height_maps(patches, result, o);
             const double optimized_misses = s.synthesis == "auto" ? misses(optimized) : 0.0;
             if (s.synthesis == "auto")
