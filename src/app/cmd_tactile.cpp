@@ -330,6 +330,7 @@ struct State {
     bool no_quilt = false;
     CLI::App *height = nullptr, *patch_cmd = nullptr, *quilt_cmd = nullptr, *normal_cmd = nullptr,
              *convert = nullptr;
+    CLI::Option* optimize_iterations = nullptr;
 };
 
 void run_height(const State& s) {
@@ -381,6 +382,11 @@ void run_convert(const State& s) {
     require_normal_map_name(s.out);
     if (s.no_quilt && s.inputs.size() > 1)
         throw_error("--no-quilt makes a normal map of one patch, but {} inputs were given", s.inputs.size());
+    if (s.optimization.iterations.size() > s.optimization.windows.size() && s.optimize_iterations->count() > 0)
+        throw_error("--optimize-iterations: {} counts for {} window sides (--optimize-windows); give at most one "
+                    "per side",
+                    s.optimization.iterations.size(),
+                    s.optimization.windows.size());
     const PatchOptions patch_options = s.patch.resolved();
     const bool steps = !s.steps_dir.empty();
     if (steps) ensure_folder(s.steps_dir);
@@ -427,6 +433,10 @@ void run_convert(const State& s) {
             if (steps) write_height_preview(step_path("6_quilted_initial.png"), result.height);
             TextureOptimizationOptions o = s.optimization;
             o.seed = quilt_options.seed;
+            o.min_coverage = quilt_options.min_coverage;  // one --min-coverage for blocks and windows
+            // The default counts (8 at the coarsest side) follow the sides given.
+            if (s.optimize_iterations->count() == 0 && o.iterations.size() > o.windows.size())
+                o.iterations.resize(std::max<std::size_t>(o.windows.size(), 1));
             HeightMap optimized = optimize_height_maps(patches, result, o);
             const double optimized_misses = s.synthesis == "auto" ? misses(optimized) : 0.0;
             if (s.synthesis == "auto")
@@ -561,9 +571,14 @@ Command register_tactile(CLI::App& root) {
                      "thin for whole blocks)")
         ->check(CLI::IsMember({"auto", "quilt", "optimize"}))
         ->capture_default_str();
-    s->convert->add_option("--optimize-iterations", s->optimization.iterations, "EM iterations per window size")
-        ->check(CLI::PositiveNumber)
-        ->capture_default_str();
+    s->optimize_iterations =
+        s->convert
+            ->add_option("--optimize-iterations",
+                         s->optimization.iterations,
+                         "EM iterations per window side (one per side of --optimize-windows; later sides repeat "
+                         "the last)")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
     s->convert->add_option("--optimize-windows", s->optimization.windows, "window sides, coarse to fine")
         ->capture_default_str();
     s->input.add(s->convert);

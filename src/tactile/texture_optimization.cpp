@@ -127,7 +127,9 @@ public:
 
     Image run() {
         std::uint64_t pass = 0;
-        for (int side : m_options.windows) {
+        for (std::size_t k = 0; k < m_options.windows.size(); ++k) {
+            const int side = m_options.windows[k];
+            const int iterations = m_options.iterations[std::min(k, m_options.iterations.size() - 1)];
             if (side > m_out.width() || side > m_out.height()) continue;
             bool fits = true;
             for (const Image& e : m_exemplars) fits = fits && side <= e.width() && side <= e.height();
@@ -143,9 +145,9 @@ public:
             m_matches.assign(m_xs.size() * m_ys.size(), Source{});
             m_distances.assign(m_matches.size(), 0.0);
             initial_matches(sources, pass);
-            for (int i = 0; i < m_options.iterations; ++i) {
+            for (int i = 0; i < iterations; ++i) {
                 if (i > 0) search(sources, ++pass);
-                const bool last = side == m_options.windows.back() && i + 1 == m_options.iterations;
+                const bool last = k + 1 == m_options.windows.size() && i + 1 == iterations;
                 blend(sources, last);
             }
             ++pass;
@@ -320,7 +322,13 @@ Image optimize_texture(const std::vector<Image>& exemplars, const std::vector<Im
                        const TextureOptimizationOptions& options) {
     if (exemplars.empty()) throw_error("texture optimisation: no exemplar given");
     if (initial.channels() != 1) throw_error("texture optimisation: expected a 1-channel initial texture");
-    if (options.iterations < 1) throw_error("texture optimisation: iterations must be >= 1, got {}", options.iterations);
+    if (options.windows.empty()) throw_error("texture optimisation: no window side given");
+    if (options.iterations.empty() || options.iterations.size() > options.windows.size())
+        throw_error("texture optimisation: expected 1 to {} iteration counts (one per window side), got {}",
+                    options.windows.size(),
+                    options.iterations.size());
+    for (int n : options.iterations)
+        if (n < 1) throw_error("texture optimisation: iterations must be >= 1, got {}", n);
     if (!(options.min_coverage >= 0.0f && options.min_coverage <= 1.0f))
         throw_error("texture optimisation: the minimum region coverage must be in [0, 1], got {}", options.min_coverage);
     for (int side : options.windows)

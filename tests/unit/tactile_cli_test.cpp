@@ -120,3 +120,22 @@ TEST(TactileCli, BadInputFailsWithOneLineNamingTheFile) {
     EXPECT_EQ(run.output.rfind("tdf tactile: ", 0), 0u) << run.output;
     EXPECT_NE(run.output.find(missing), std::string::npos) << run.output;
 }
+
+TEST(TactileCli, OptimizeIterationsFollowTheWindowSides) {
+    // The default iteration counts (8 4 4) follow fewer window sides; counts given explicitly
+    // must fit them.
+    TDF_REQUIRE_TDF_BINARY();
+    TDF_REQUIRE_SHARED_DATA("tactile/texture_samples/Potato_00000.png");
+    const std::string sample = test::shared_data_dir() + "/tactile/texture_samples/Potato_00000.png";
+    const std::string out = test::scratch_dir() + "/potato_optimized.png";
+    const std::string convert =
+        "tactile convert " + sample + " -o " + out + " --size 80 --size-mm 20.4 --synthesis optimize -q";
+    CliRun run = run_tdf(convert + " --optimize-windows 16 8");
+    EXPECT_EQ(run.status, 0) << run.output;
+    run = run_tdf(convert + " --optimize-windows 16 8 --optimize-iterations 3");
+    EXPECT_EQ(run.status, 0) << run.output;
+    run = run_tdf(convert + " --optimize-windows 16 8 --optimize-iterations 8 4 4");
+    EXPECT_EQ(run.status, 1) << run.output;
+    EXPECT_EQ(run.output.rfind("tdf tactile: --optimize-iterations: 3 counts for 2 window sides", 0), 0u) << run.output;
+    EXPECT_EQ(run.output.find('\n'), run.output.size() - 1) << "one line: " << run.output;
+}

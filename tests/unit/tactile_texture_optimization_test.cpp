@@ -17,7 +17,7 @@ namespace {
 TextureOptimizationOptions small_options() {
     TextureOptimizationOptions o;
     o.windows = {16, 8};
-    o.iterations = 2;
+    o.iterations = {2};
     o.seed = 5;
     return o;
 }
@@ -103,7 +103,14 @@ TEST(TextureOptimization, WindowsComeOnlyFromTheRegion) {
 TEST(TextureOptimization, BadOptionsAreErrors) {
     const Image e = synthetic_texture(32, 1);
     TextureOptimizationOptions o = small_options();
-    o.iterations = 0;
+    o.iterations = {0};
+    EXPECT_THROW(optimize_texture({e}, {}, e, o), Error);
+    o.iterations = {2, 2, 2};  // more counts than the 2 window sides
+    EXPECT_THROW(optimize_texture({e}, {}, e, o), Error);
+    o.iterations = {};
+    EXPECT_THROW(optimize_texture({e}, {}, e, o), Error);
+    o = small_options();
+    o.windows = {};
     EXPECT_THROW(optimize_texture({e}, {}, e, o), Error);
     o = small_options();
     o.windows = {2};
@@ -130,4 +137,19 @@ TEST(TextureOptimization, NoLinePatternFromTheWindowGrid) {
             (y % 2 ? odd : even) += std::abs(out.at(x, (y + 1) % out.height(), 0) - out.at(x, y, 0));
     RecordProperty("even_odd_row_steps", std::to_string(even / odd));
     EXPECT_NEAR(even / odd, 1.0, 0.15);
+}
+
+TEST(TextureOptimization, IterationsCountPerWindowSide) {
+    // iterations[k] runs at windows[k]; a shorter list repeats its last value.
+    const std::vector<Image> exemplars = {synthetic_texture(64, 1)};
+    const Image initial = synthetic_texture(80, 3);
+    TextureOptimizationOptions o = small_options();
+    auto run = [&](std::vector<int> iterations) {
+        o.iterations = std::move(iterations);
+        return optimize_texture(exemplars, {}, initial, o).values();
+    };
+    const std::vector<float> two_two = run({2, 2});
+    EXPECT_EQ(run({2}), two_two) << "one value is every side's";
+    EXPECT_NE(run({3, 2}), two_two) << "the coarse side's count has no effect";
+    EXPECT_NE(run({2, 3}), two_two) << "the fine side's count has no effect";
 }
