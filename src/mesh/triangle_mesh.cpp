@@ -1,6 +1,7 @@
 #include <tdf/mesh/triangle_mesh.h>
 
 #include <tdf/core/error.h>
+#include <tdf/mesh/uv_seams.h>
 
 #include <cmath>
 #include <map>
@@ -54,35 +55,20 @@ int find_root(std::vector<int>& parent, int v) {
 // faces of the same handedness that meet at a position edge whose two UV corners both differ by
 // one translation. Every tangent vertex ends up pointing at the smallest of its group.
 void weld_translation_seams(const TriangleMesh& mesh, const std::vector<int>& face_side, std::vector<int>& frame_of) {
-    struct Side {
-        int face, corner_a, corner_b;  // corners (0..2) of the edge's smaller and larger position
-    };
-    std::map<std::pair<int, int>, std::vector<Side>> edges;
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
-        for (int k = 0; k < 3; ++k) {
-            int ka = k, kb = (k + 1) % 3;
-            if (mesh.triangles[f][ka] == mesh.triangles[f][kb]) continue;
-            if (mesh.triangles[f][ka] > mesh.triangles[f][kb]) std::swap(ka, kb);
-            edges[{mesh.triangles[f][ka], mesh.triangles[f][kb]}].push_back({int(f), ka, kb});
-        }
-    const auto uv = [&](int face, int corner) { return mesh.uvs[std::size_t(mesh.uv_triangles[std::size_t(face)][corner])]; };
     constexpr float kSameShift = 1e-5f;
-    for (const auto& [edge, sides] : edges)
-        for (std::size_t i = 0; i < sides.size(); ++i)
-            for (std::size_t j = i + 1; j < sides.size(); ++j) {
-                const Side& s = sides[i];
-                const Side& t = sides[j];
-                if (face_side[std::size_t(s.face)] != face_side[std::size_t(t.face)]) continue;
-                const Vec2f shift_a = uv(t.face, t.corner_a) - uv(s.face, s.corner_a);
-                const Vec2f shift_b = uv(t.face, t.corner_b) - uv(s.face, s.corner_b);
-                const bool moved = std::fabs(shift_a.x) + std::fabs(shift_a.y) > kSameShift;
-                if (!moved || std::fabs(shift_a.x - shift_b.x) + std::fabs(shift_a.y - shift_b.y) > kSameShift) continue;
-                for (const auto& [cs, ct] : {std::pair{s.corner_a, t.corner_a}, std::pair{s.corner_b, t.corner_b}}) {
-                    const int a = find_root(frame_of, mesh.tangent_triangles[std::size_t(s.face)][cs]);
-                    const int b = find_root(frame_of, mesh.tangent_triangles[std::size_t(t.face)][ct]);
-                    frame_of[std::size_t(std::max(a, b))] = std::min(a, b);
-                }
-            }
+    for (const SharedEdge& e : shared_edges(mesh)) {
+        const int s = e.face[0], t = e.face[1];
+        if (face_side[std::size_t(s)] != face_side[std::size_t(t)]) continue;
+        const Vec2f shift_lo = corner_uv(mesh, t, e.corner_lo[1]) - corner_uv(mesh, s, e.corner_lo[0]);
+        const Vec2f shift_hi = corner_uv(mesh, t, e.corner_hi[1]) - corner_uv(mesh, s, e.corner_hi[0]);
+        const bool moved = std::fabs(shift_lo.x) + std::fabs(shift_lo.y) > kSameShift;
+        if (!moved || std::fabs(shift_lo.x - shift_hi.x) + std::fabs(shift_lo.y - shift_hi.y) > kSameShift) continue;
+        for (const auto& [cs, ct] : {std::pair{e.corner_lo[0], e.corner_lo[1]}, std::pair{e.corner_hi[0], e.corner_hi[1]}}) {
+            const int a = find_root(frame_of, mesh.tangent_triangles[std::size_t(s)][cs]);
+            const int b = find_root(frame_of, mesh.tangent_triangles[std::size_t(t)][ct]);
+            frame_of[std::size_t(std::max(a, b))] = std::min(a, b);
+        }
+    }
     for (std::size_t v = 0; v < frame_of.size(); ++v) frame_of[v] = find_root(frame_of, int(v));
 }
 

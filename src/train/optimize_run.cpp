@@ -219,6 +219,11 @@ void run_optimize(const OptimizeOptions& options) {
     }
 
     Trainer trainer(target, config, description.seed);
+    if (trainer.tactile_seam_blend().seam_edges > 0)
+        log_info("tactile map across UV seams: {} seam edges, {} texels cross-faded within {} texels "
+                 "(field.tactile_seam_band)",
+                 trainer.tactile_seam_blend().seam_edges, trainer.tactile_seam_blend().blended_texels,
+                 config.tactile_seam_band);
     auto visual = make_backend(config.guidance_visual, config, description.tactile_images);
     // Multi-part: a tactile backend per part, with the part's own maps as exemplars and its own
     // settings (parts.list[i].guidance), gated by the part's mask (README "Multi-part textures").

@@ -51,6 +51,7 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.residual_optimizer = fr.get("residual_optimizer", c.residual_optimizer);
     c.residual_step = fr.get("residual_step", c.residual_step);
     c.residual_step_smoothing = fr.get("residual_step_smoothing", c.residual_step_smoothing);
+    c.tactile_seam_band = fr.get("tactile_seam_band", c.tactile_seam_band);
     fr.check_all_read();
     if (c.evaluation == FieldEvaluation::Pixel && !schedule.is_string()) {
         // Pixel evaluation without a schedule named: the reference's losses.
@@ -170,6 +171,8 @@ void RunConfig::validate(const std::string& source) const {
         throw_error("{}: field.residual_step must be in (0, 1], got {}", source, residual_step);
     if (residual_step_smoothing < 0 || residual_step_smoothing > 8)
         throw_error("{}: field.residual_step_smoothing must be in [0, 8], got {}", source, residual_step_smoothing);
+    if (!(tactile_seam_band >= 0.0f && tactile_seam_band <= 64.0f))
+        throw_error("{}: field.tactile_seam_band must be in [0, 64] texels, got {}", source, tactile_seam_band);
     if (visual_guidance_loss != "mse" && visual_guidance_loss != "l1_structural")
         throw_error("{}: optimize.visual_guidance_loss must be \"mse\" or \"l1_structural\", got '{}'", source,
                     visual_guidance_loss);
@@ -219,7 +222,8 @@ Json RunConfig::to_json() const {
                   {"refine_grid", refine_grid},
                   {"fit_texels", fit_texels},
                   {"residual_optimizer", residual_optimizer},
-                  {"residual_step", residual_step}, {"residual_step_smoothing", residual_step_smoothing}};
+                  {"residual_step", residual_step}, {"residual_step_smoothing", residual_step_smoothing},
+                  {"tactile_seam_band", tactile_seam_band}};
     j["tactile_layout"] = {{"mode", tactile_layout == TactileLayout::Atlas ? "atlas" : "physical"},
                            {"mm_per_unit", mm_per_unit},
                            {"mm_per_pixel", tactile_mm_per_pixel}};

@@ -135,18 +135,22 @@ Image albedo_target(const TexelAtlas& atlas, const SurfaceMaterial& material, co
     return map;
 }
 
+Vec3f sample_tactile_layout(const SurfaceMaterial& material, Vec2f uv, Vec2f duv_dx, Vec2f duv_dy) {
+    if (!material.tactile) return {0, 0, 1};
+    const float s = material.tactile_layout.uv_scale;
+    float texel[kMaxTextureChannels];
+    material.tactile->sample_trilinear(uv * s, duv_dx * s, duv_dy * s, texel, -1);
+    return safe_normalize(Vec3f{texel[0], texel[1], texel[2]});
+}
+
 Image tactile_target(const TexelAtlas& atlas, const SurfaceMaterial& material) {
-    const TactileLayoutTransform& layout = material.tactile_layout;
     Image map(atlas.size, atlas.size, 3, 0.0f);
     for (std::size_t t = 0; t < map.pixel_count(); ++t) map.data()[3 * t + 2] = 1.0f;
     if (material.tactile) {
-        const float s = layout.uv_scale;
         parallel_for(atlas.covered_count(), 4096, [&](std::size_t begin, std::size_t end) {
-            float texel[kMaxTextureChannels];
             for (std::size_t k = begin; k < end; ++k) {
-                material.tactile->sample_trilinear(atlas.uvs[k] * s, texel_step_x(atlas.size, s),
-                                                   texel_step_y(atlas.size, s), texel, -1);
-                const Vec3f n = safe_normalize(Vec3f{texel[0], texel[1], texel[2]});
+                const Vec3f n = sample_tactile_layout(material, atlas.uvs[k], texel_step_x(atlas.size, 1.0f),
+                                                      texel_step_y(atlas.size, 1.0f));
                 std::copy(&n.x, &n.x + 3, map.data() + 3 * std::size_t(atlas.texels[k]));
             }
         });

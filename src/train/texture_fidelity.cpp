@@ -153,38 +153,25 @@ Json TextureFidelity::to_json() const {
             {"flat_fraction", flat_fraction}, {"coverage", coverage}};
 }
 
-MeshSeams::MeshSeams(const TriangleMesh& mesh) {
-    // Each position edge (a, b) with a < b, seen from every triangle that has it: the triangle and
-    // the UV indices of a and b there.
-    struct Side {
-        int triangle;
-        int uv_a, uv_b;
+MeshSeams::MeshSeams(const TriangleMesh& mesh, float crease_degrees) {
+    const auto face_normal = [&](int f) {
+        const Vec3i& t = mesh.triangles[std::size_t(f)];
+        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
+        return safe_normalize(cross(mesh.positions[std::size_t(t.y)] - p0, mesh.positions[std::size_t(t.z)] - p0));
     };
-    std::unordered_map<std::uint64_t, std::vector<Side>> sides;
-    const auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); };
-    const bool has_uvs = mesh.has_uvs();
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
-        for (int k = 0; k < 3; ++k) {
-            int a = mesh.triangles[f][k], b = mesh.triangles[f][(k + 1) % 3];
-            int ua = has_uvs ? mesh.uv_triangles[f][k] : a, ub = has_uvs ? mesh.uv_triangles[f][(k + 1) % 3] : b;
-            if (a == b) continue;
-            if (a > b) std::swap(a, b), std::swap(ua, ub);
-            sides[key(a, b)].push_back({int(f), ua, ub});
+    const float crease_cos = std::cos(crease_degrees * 3.14159265f / 180.0f);
+    for (const SharedEdge& e : shared_edges(mesh)) {
+        EdgeContinuity kind = uv_continuity(mesh, e);
+        // A seam along a crease (a mug's base meeting its side) may change colour by design.
+        if (kind == EdgeContinuity::Seam && dot(face_normal(e.face[0]), face_normal(e.face[1])) < crease_cos) {
+            kind = EdgeContinuity::Apart;
+            ++m_crease_edges;
         }
-    // UV indices can differ while the UVs are equal (a file that repeats a vt line): compare values.
-    const auto same_uv = [&](int i, int j) { return !has_uvs || i == j || (mesh.uvs[std::size_t(i)].x == mesh.uvs[std::size_t(j)].x && mesh.uvs[std::size_t(i)].y == mesh.uvs[std::size_t(j)].y); };
-    for (const auto& [edge, list] : sides)
-        for (std::size_t i = 0; i < list.size(); ++i)
-            for (std::size_t j = i + 1; j < list.size(); ++j) {
-                const bool a_same = same_uv(list[i].uv_a, list[j].uv_a), b_same = same_uv(list[i].uv_b, list[j].uv_b);
-                const EdgeContinuity kind = a_same && b_same ? EdgeContinuity::Continuous
-                                            : a_same || b_same ? EdgeContinuity::Cone
-                                                               : EdgeContinuity::Seam;
-                const int lo = std::min(list[i].triangle, list[j].triangle), hi = std::max(list[i].triangle, list[j].triangle);
-                m_edges[key(lo, hi)] = kind;
-                m_seam_edges += kind == EdgeContinuity::Seam ? 1 : 0;
-                m_cone_edges += kind == EdgeContinuity::Cone ? 1 : 0;
-            }
+        const int lo = std::min(e.face[0], e.face[1]), hi = std::max(e.face[0], e.face[1]);
+        m_edges[(std::uint64_t(std::uint32_t(lo)) << 32) | std::uint32_t(hi)] = kind;
+        m_seam_edges += kind == EdgeContinuity::Seam ? 1 : 0;
+        m_cone_edges += kind == EdgeContinuity::Cone ? 1 : 0;
+    }
 }
 
 EdgeContinuity MeshSeams::between(int triangle_a, int triangle_b) const {

@@ -3,6 +3,7 @@
 #include <tdf/train/asset_export.h>
 #include <tdf/train/part_gating.h>
 #include <tdf/train/part_label_head.h>
+#include <tdf/train/tactile_seam_blend.h>
 #include <tdf/train/texture_fidelity.h>
 
 #include <tdf/atlas/uv_metrics.h>
@@ -187,6 +188,8 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
             m_tactile_target = *target.tactile_target_override;
         } else {
             m_tactile_target = tdf::tactile_target(*m_atlas, *target.material);
+            m_seam_blend = cross_fade_tactile_seams(m_tactile_target, *m_atlas, *target.mesh, *target.material,
+                                                    config.tactile_seam_band);
         }
         m_albedo_target_texture = MipTexture(m_albedo_target);
         m_tactile_target_texture = MipTexture(m_tactile_target);

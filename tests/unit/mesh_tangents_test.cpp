@@ -4,6 +4,8 @@
 #include <tdf/core/vec.h>
 #include <tdf/mesh/triangle_mesh.h>
 
+#include "common/cone_band.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,43 +16,10 @@ namespace {
 
 constexpr int kSegments = 8;
 
-// An open cone band around y (radius 1 at y = 0, 0.5 at y = 1), u = s / kSegments around it (the
-// column u = 1 duplicates u = 0), v = y. On a cone the faces' dP/du, horizontal chords, leave
-// the tangent planes of the vertices at an angle, so a side that averages only its own faces
-// turns its frame about the normal (on a cylinder the projection would hide that). With `turn_first_chart`, the faces of segment 0 get their
-// own UVs, turned a quarter round inside their own square: a seam that is not a translation.
+// The band's cut at u = 0 / 1 is a translation seam; `turn_first_chart` gives segment 0 a chart of
+// its own at u = 2, turned a quarter round.
 TriangleMesh make_band(bool turn_first_chart) {
-    TriangleMesh mesh;
-    mesh.source_path = "band";
-    for (int ring = 0; ring < 2; ++ring)
-        for (int s = 0; s < kSegments; ++s) {
-            const float phi = 2.0f * kPi * float(s) / float(kSegments);
-            const float radius = ring == 0 ? 1.0f : 0.5f;
-            mesh.positions.push_back({radius * std::sin(phi), float(ring), radius * std::cos(phi)});
-        }
-    for (int ring = 0; ring < 2; ++ring)
-        for (int s = 0; s <= kSegments; ++s) mesh.uvs.push_back({float(s) / float(kSegments), float(ring)});
-    const auto p = [](int ring, int s) { return ring * kSegments + s % kSegments; };
-    const auto t = [](int ring, int s) { return ring * (kSegments + 1) + s; };
-    for (int s = 0; s < kSegments; ++s) {
-        Vec3i t0{t(0, s), t(0, s + 1), t(1, s + 1)}, t1{t(0, s), t(1, s + 1), t(1, s)};
-        if (s == 0 && turn_first_chart) {
-            // Corners (0,0) (1,0) (1,1) (0,1) of the square become (1,0) (1,1) (0,1) (0,0).
-            const int base = int(mesh.uvs.size());
-            const float w = 1.0f / float(kSegments);
-            for (Vec2f c : {Vec2f{w, 0}, Vec2f{w, 1}, Vec2f{0, 1}, Vec2f{0, 0}}) mesh.uvs.push_back({2.0f + c.x, c.y});
-            t0 = {base, base + 1, base + 2};
-            t1 = {base, base + 2, base + 3};
-        }
-        // Counter-clockwise seen from outside (u grows with phi, v with y).
-        mesh.triangles.push_back({p(0, s), p(0, s + 1), p(1, s + 1)});
-        mesh.uv_triangles.push_back(t0);
-        mesh.triangles.push_back({p(0, s), p(1, s + 1), p(1, s)});
-        mesh.uv_triangles.push_back(t1);
-    }
-    compute_normals(mesh);
-    compute_tangents(mesh);
-    return mesh;
+    return test::make_cone_band(kSegments, 1.0f / float(kSegments), 1.0f, 1.0f, 0.5f, turn_first_chart, {2.0f, 0.0f});
 }
 
 // The tangents of the corners of position `position` in the faces that have it.

@@ -78,3 +78,13 @@ TEST(SeamMeasure, OcclusionEdgesAndContinuousEdgesAreNotSeams) {
     none.add(occluded.g, ramp(0.5f), MeshSeams(occluded.mesh));
     EXPECT_EQ(none.seam_pairs, 0u);
 }
+
+TEST(SeamMeasure, SeamsAlongCreasesAreNotCounted) {
+    SeamRow row;
+    // Fold triangle 1 up by 90 degrees about the shared edge (x = 1): a base meeting a side.
+    row.mesh.positions[3] = {1, 0, 1};
+    const MeshSeams folded(row.mesh);
+    EXPECT_EQ(folded.between(0, 1), EdgeContinuity::Apart);
+    EXPECT_EQ(folded.crease_edges(), 1u);
+    EXPECT_EQ(MeshSeams(row.mesh, 100.0f).between(0, 1), EdgeContinuity::Seam);
+}

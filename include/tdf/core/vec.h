@@ -62,6 +62,9 @@ inline Vec3f cross(Vec3f a, Vec3f b) {
 }
 inline float length_squared(Vec3f a) { return dot(a, a); }
 inline float length(Vec3f a) { return std::sqrt(dot(a, a)); }
+inline float dot(Vec2f a, Vec2f b) { return a.x * b.x + a.y * b.y; }
+inline float length_squared(Vec2f a) { return dot(a, a); }
+inline float length(Vec2f a) { return std::sqrt(dot(a, a)); }
 
 /// The reference's `safe_normalize`: x / sqrt(max(|x|^2, 1e-20)) (spec notation section).
 inline Vec3f safe_normalize(Vec3f a) { return a / std::sqrt(std::max(dot(a, a), 1e-20f)); }

@@ -67,6 +67,10 @@ struct RunConfig {
     /// ("field.residual_step_smoothing", 0-8): views that read coarse mip levels would otherwise
     /// move 2x2 blocks of texels together and leave their edges in the exported map.
     int residual_step_smoothing = 2;
+    /// Texture evaluation: texels (at the map size) over which the tactile map laid per chart is
+    /// cross-faded with the neighbouring chart's across every UV seam ("field.tactile_seam_band",
+    /// 0-64; 0 keeps the reference's per-chart layout): tactile_seam_blend.h.
+    float tactile_seam_band = 8.0f;
     /// The visual guidance loss: "l1_structural" (reference: L1 + structural term, spec 5.4) or
     /// "mse" (texture schedule default: a squared error, whose gradient says how far each
     /// pixel is from its target, which the Jacobi step needs).

@@ -54,4 +54,8 @@ Image albedo_target(const TexelAtlas& atlas, const SurfaceMaterial& material, co
 /// step 5); (0,0,1) without a map; gutter filled.
 Image tactile_target(const TexelAtlas& atlas, const SurfaceMaterial& material);
 
+/// The tactile map laid as above at one UV (OBJ convention) with the footprint (duv_dx, duv_dy)
+/// in the atlas's UVs, renormalised; (0,0,1) without a map.
+Vec3f sample_tactile_layout(const SurfaceMaterial& material, Vec2f uv, Vec2f duv_dx, Vec2f duv_dy);
+
 }  // namespace tdf

@@ -5,6 +5,7 @@
 /// independent script agree.
 #include <tdf/core/image.h>
 #include <tdf/core/config.h>
+#include <tdf/mesh/uv_seams.h>
 
 #include <cstdint>
 #include <unordered_map>
@@ -13,7 +14,6 @@
 namespace tdf {
 
 struct GBuffer;
-struct TriangleMesh;
 
 struct TextureFidelity {
     double albedo_psnr = 0;          ///< dB, full band
@@ -39,25 +39,20 @@ TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albed
                                          const Image& normal_target, const std::vector<std::uint8_t>& covered,
                                          float lowpass_sigma = 2.0f);
 
-/// How the surface continues between two triangles of a mesh, for measuring seams where the
-/// viewer sees them (issue 10 goal 4). Two triangles that share a position edge are either
-/// - `Continuous`: they also share both edge corners' UVs (one chart),
-/// - `Seam`: both shared corners have other UVs on each side (a chart boundary, like a sphere's
-///   u = 0/1 meridian or the cut between two atlas charts), or
-/// - `Cone`: one shared corner keeps its UV and the other does not (a UV singularity, such as the
-///   fan of a sphere's pole, where one surface point has a different UV in every triangle);
-/// a triangle with itself is `Same`, and triangles that share no edge are `Apart`.
-enum class EdgeContinuity { Same, Continuous, Seam, Cone, Apart };
+/// The continuity (uv_seams.h) between any two triangles of a mesh, looked up per pixel pair.
+/// Seams along creases sharper than `crease_degrees` (between the faces' normals) count as
+/// `Apart`: there the surface turns a corner, and its colour and relief may change by design.
 class MeshSeams {
 public:
-    explicit MeshSeams(const TriangleMesh& mesh);
+    explicit MeshSeams(const TriangleMesh& mesh, float crease_degrees = 30.0f);
     EdgeContinuity between(int triangle_a, int triangle_b) const;
     std::size_t seam_edges() const { return m_seam_edges; }
     std::size_t cone_edges() const { return m_cone_edges; }
+    std::size_t crease_edges() const { return m_crease_edges; }
 
 private:
     std::unordered_map<std::uint64_t, EdgeContinuity> m_edges;  ///< key: (min triangle, max triangle)
-    std::size_t m_seam_edges = 0, m_cone_edges = 0;
+    std::size_t m_seam_edges = 0, m_cone_edges = 0, m_crease_edges = 0;
 };
 
 /// Seams as a viewer sees them (issue 10 goal 4), in a traced view: for every pair of

@@ -28,6 +28,7 @@
 #include <tdf/train/loss_log.h>
 #include <tdf/train/learned_maps.h>
 #include <tdf/train/run_config.h>
+#include <tdf/train/tactile_seam_blend.h>
 #include <tdf/train/texel_atlas.h>
 #include <tdf/train/texture_bake.h>
 
@@ -179,6 +180,8 @@ public:
     const TexelAtlas* texel_atlas() const { return m_atlas.get(); }
     const Image& albedo_target() const { return m_albedo_target; }
     const Image& tactile_target() const { return m_tactile_target; }
+    /// What cross_fade_tactile_seams did to the tactile target (zeros per pixel or with a band of 0).
+    const SeamBlendStats& tactile_seam_blend() const { return m_seam_blend; }
     /// Multi-part: the part the label head predicts (argmax of its logits at each covered
     /// texel's surface point), -1 at uncovered texels; size x size. Empty without parts.
     std::vector<int> predicted_texel_parts() const;
@@ -246,6 +249,7 @@ private:
     std::unique_ptr<TexelAtlas> m_atlas;
     std::unique_ptr<LearnedMaps> m_maps;
     Image m_albedo_target, m_tactile_target;
+    SeamBlendStats m_seam_blend;
     MipTexture m_albedo_target_texture;   // the input albedo over the atlas, as renders sample it
     MipTexture m_tactile_target_texture;  // the tactile target over the atlas, likewise
     std::unique_ptr<Adam> m_residual_adam;
