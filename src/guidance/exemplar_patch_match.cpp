@@ -730,26 +730,24 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
 
     // The cached exemplars are built here, before the images are refined in parallel (each
     // image is independent and draws from its own seed streams, so the order does not matter).
-    const std::vector<Image>* scaled = use_surface ? &scaled_exemplars(scale.exemplar_factor) : nullptr;
+    // The exemplar variants are built here, before the images are refined in parallel (each
+    // image is independent and draws from its own seed streams, so the order does not matter).
     const std::vector<Variant>* searched = use_surface ? nullptr : &search_variants(scale.exemplar_factor);
+    std::vector<const OrientedVariants*> oriented(request.images.size(), nullptr);
+    if (use_surface)
+        for (std::size_t item = 0; item < request.images.size(); ++item)
+            oriented[item] = &oriented_variants(surface_orientation(request, item), scale.exemplar_factor);
     GuidanceResult result;
     result.refined.resize(request.images.size());
     parallel_for(request.images.size(), 1, [&](std::size_t i0, std::size_t i1) {
-        for (std::size_t item = i0; item < i1; ++item) {
-            std::vector<Variant> oriented;
-            std::vector<std::vector<float>> oriented_tilts;
-            if (use_surface) {
-                oriented = surface_variants(request, item, *scaled, scale.exemplar_factor);
-                oriented_tilts = tilt_tables(oriented);
-            }
+        for (std::size_t item = i0; item < i1; ++item)
             result.refined[item] = refine_image(request,
                                                 item,
-                                                use_surface ? oriented : *searched,
-                                                use_surface ? oriented_tilts : m_search_tilts,
+                                                use_surface ? oriented[item]->variants : *searched,
+                                                use_surface ? oriented[item]->tilts : m_search_tilts,
                                                 use_surface,
                                                 scale.width,
                                                 scale.height);
-        }
     });
     return result;
 }
@@ -837,9 +835,8 @@ Image ExemplarPatchMatchBackend::refine_image(const GuidanceRequest& request, st
     return out;
 }
 
-std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surface_variants(
-    const GuidanceRequest& request, std::size_t item, const std::vector<Image>& scaled_exemplars,
-    float factor) const {
+ExemplarPatchMatchBackend::Orientation ExemplarPatchMatchBackend::surface_orientation(const GuidanceRequest& request,
+                                                                                     std::size_t item) const {
     // The map's orientation in the image: the coverage-weighted mean of the stood-up tangents
     // (u axis) and the majority handedness.
     const Image& mask = request.masks[item];
@@ -855,17 +852,32 @@ std::vector<ExemplarPatchMatchBackend::Variant> ExemplarPatchMatchBackend::surfa
         mean_tangent += shortest_arc_to_z(Vec3f(a[0], a[1], a[2]), Vec3f(t[0], t[1], t[2]), false) * m;
         handedness += double(m) * double(t[3]);
     }
-    float angle = std::atan2(mean_tangent.y, mean_tangent.x);
-    // Within 0.06 degrees of a quarter turn: take the quarter turn, which moves texels exactly
-    // instead of resampling (and cropping) the exemplar for an invisible difference.
-    const float quarter = std::round(angle / (0.5f * kPi)) * 0.5f * kPi;
-    if (std::abs(angle - quarter) < 1e-3f) angle = quarter;
-    std::vector<Variant> variants;
-    for (const Image& scaled : scaled_exemplars)
-        variants.push_back(build_variant(
-            rotate_normal_map(scaled, angle, handedness < 0.0), m_options.levels, m_options.patch_size));
-    check_variants(variants, factor);
-    return variants;
+    const float angle = std::atan2(mean_tangent.y, mean_tangent.x);
+    int step = int(std::lround(angle / (2.0f * kPi) * float(kOrientationSteps)));
+    step = ((step % kOrientationSteps) + kOrientationSteps) % kOrientationSteps;
+    return {step, handedness < 0.0};
+}
+
+const ExemplarPatchMatchBackend::OrientedVariants& ExemplarPatchMatchBackend::oriented_variants(Orientation orientation,
+                                                                                              float factor) {
+    if (factor != m_oriented_factor) {
+        m_oriented.clear();
+        m_oriented_factor = factor;
+    }
+    const auto found = m_oriented.find(orientation);
+    if (found != m_oriented.end()) return found->second;
+    // Quarter turns exactly (they move texels instead of resampling and cropping the exemplar).
+    constexpr int kQuarter = kOrientationSteps / 4;
+    const float angle = orientation.step % kQuarter == 0
+                            ? float(orientation.step / kQuarter) * 0.5f * kPi
+                            : 2.0f * kPi * float(orientation.step) / float(kOrientationSteps);
+    OrientedVariants oriented;
+    for (const Image& scaled : scaled_exemplars(factor))
+        oriented.variants.push_back(build_variant(rotate_normal_map(scaled, angle, orientation.mirrored), m_options.levels,
+                                                  m_options.patch_size));
+    check_variants(oriented.variants, factor);
+    oriented.tilts = tilt_tables(oriented.variants);
+    return m_oriented.emplace(orientation, std::move(oriented)).first->second;
 }
 
 double ExemplarPatchMatchBackend::mean_nearest_patch_distance(const Image& normals, const Image& mask) const {

@@ -55,6 +55,7 @@
 
 #include <cstdint>
 #include <string>
+#include <map>
 #include <vector>
 
 namespace tdf {
@@ -131,10 +132,24 @@ private:
     /// The rotation (and flip) variants searched without surface frames, with the exemplars
     /// resampled by `factor`; rebuilt only when the factor changes.
     const std::vector<Variant>& search_variants(float factor);
-    /// One variant per exemplar (`scaled_exemplars`, resampled by `factor`), turned and mirrored
-    /// as the map lies in image `item`.
-    std::vector<Variant> surface_variants(const GuidanceRequest& request, std::size_t item,
-                                          const std::vector<Image>& scaled_exemplars, float factor) const;
+    /// How the map lies in image `item`: the turn of its u axis in steps of a 72th of a turn (5
+    /// degrees; quarter turns exact) and whether it is mirrored.
+    struct Orientation {
+        int step = 0;
+        bool mirrored = false;
+        bool operator<(const Orientation& o) const { return step != o.step ? step < o.step : mirrored < o.mirrored; }
+    };
+    static constexpr int kOrientationSteps = 72;
+    Orientation surface_orientation(const GuidanceRequest& request, std::size_t item) const;
+    /// One variant per exemplar (`scaled_exemplars(factor)`) turned and mirrored by `orientation`,
+    /// and their tilt tables. Cached per orientation (patches of a run take a few dozen of them),
+    /// so a refinement no longer turns the exemplars for every patch; the cache is dropped when the
+    /// factor changes.
+    struct OrientedVariants {
+        std::vector<Variant> variants;
+        std::vector<std::vector<float>> tilts;
+    };
+    const OrientedVariants& oriented_variants(Orientation orientation, float factor);
     /// Steps 1-4 for image `item` of the request, searched against `variants`, at the working
     /// size work_width x work_height (the image's own size, or the coarse copy's).
     Image refine_image(const GuidanceRequest& request, std::size_t item, const std::vector<Variant>& variants,
@@ -158,6 +173,8 @@ private:
     std::vector<Variant> m_search_variants;
     std::vector<std::vector<float>> m_search_tilts;  ///< tilt_tables(m_search_variants)
     float m_search_factor = 0.0f;
+    std::map<Orientation, OrientedVariants> m_oriented;
+    float m_oriented_factor = 0.0f;
 };
 
 
