@@ -2,6 +2,7 @@
 
 #include <tdf/atlas/bake.h>
 #include <tdf/atlas/uv_atlas.h>
+#include <tdf/tactile/material_statistics.h>
 #include <tdf/tactile/tactile_map.h>
 
 #include <tdf/core/error.h>
@@ -152,6 +153,14 @@ std::unique_ptr<SceneAssets> load_scene_assets(const SceneDescription& d) {
         assets->tactile = MipTexture(map.normals);
         m.tactile = &assets->tactile;
         m.tactile_layout = resolve_tactile_layout(d, assets->mesh, map.normals.width(), map.mm_per_pixel);
+        // The map repeats over the atlas: one that does not tile shows its wrap at every repeat
+        // (a line across the surface that no seam handling can remove).
+        const SeamStatistics wrap = normal_map_wrap_statistics(map.normals);
+        if (wrap.wrap_ratio_columns > kSeamLimit || wrap.wrap_ratio_rows > kSeamLimit)
+            log_warning("{}: tactile map '{}' does not tile: the step across its wrap is {:.1f}x (columns) and {:.1f}x "
+                        "(rows) the steps next to it, so every repeat shows a seam; `tdf tactile convert` makes "
+                        "tileable maps",
+                        d.path, path, wrap.wrap_ratio_columns, wrap.wrap_ratio_rows);
         if (d.tactile_images.size() > 1)
             log_info("{}: rendering the first of {} tactile images", d.path, d.tactile_images.size());
     }

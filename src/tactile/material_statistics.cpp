@@ -238,7 +238,7 @@ double material_misses(const std::vector<MaterialComparison>& comparisons, const
 }
 
 SeamStatistics seam_statistics(const Image& height, const Image& seams) {
-    TDF_CHECK_EQ(height.channels(), 1);
+    TDF_CHECK(height.channels() >= 1);
     const int w = height.width(), h = height.height();
     SeamStatistics s;
     if (w < 3 || h < 3) return s;
@@ -258,19 +258,23 @@ SeamStatistics seam_statistics(const Image& height, const Image& seams) {
         if (n_on > 0 && n_off > 0 && off > 0) s.cut_ratio = (on / n_on) / (off / n_off);
     }
     // Mean |step| from line i to line i + 1 (wrapping), columns or rows.
+    // (Summed over the channels: a normal map's two slopes.)
+    const int channels = height.channels();
     auto step = [&](bool columns, int i) {
         const int along = columns ? h : w, across = columns ? w : h;
         double sum = 0;
         for (int k = 0; k < along; ++k)
-            sum += columns ? std::abs(height.at((i + 1) % across, k, 0) - height.at(i, k, 0))
-                           : std::abs(height.at(k, (i + 1) % across, 0) - height.at(k, i, 0));
+            for (int c = 0; c < channels; ++c)
+                sum += columns ? std::abs(height.at((i + 1) % across, k, c) - height.at(i, k, c))
+                               : std::abs(height.at(k, (i + 1) % across, c) - height.at(k, i, c));
         return sum / along;
     };
     auto same = [&](bool columns, int a, int b) {
         const int along = columns ? h : w;
         for (int k = 0; k < along; ++k)
-            if ((columns ? height.at(a, k, 0) : height.at(k, a, 0)) != (columns ? height.at(b, k, 0) : height.at(k, b, 0)))
-                return false;
+            for (int c = 0; c < channels; ++c)
+                if ((columns ? height.at(a, k, c) : height.at(k, a, c)) != (columns ? height.at(b, k, c) : height.at(k, b, c)))
+                    return false;
         return true;
     };
     for (bool columns : {true, false}) {
@@ -309,6 +313,18 @@ Image quantized_normals(const Image& normals, int bits) {
         v = std::floor(e) / max_value * 2.0f - 1.0f;
     }
     return out;
+}
+
+SeamStatistics normal_map_wrap_statistics(const Image& normals) {
+    TDF_CHECK(normals.channels() >= 3);
+    Image slopes(normals.width(), normals.height(), 2);
+    for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
+        const float* n = normals.data() + std::size_t(normals.channels()) * p;
+        const float z = std::max(n[2], 1e-3f);
+        slopes.data()[2 * p] = n[0] / z;
+        slopes.data()[2 * p + 1] = n[1] / z;
+    }
+    return seam_statistics(slopes, Image());
 }
 
 }  // namespace tdf

@@ -271,6 +271,26 @@ TEST(MaterialSeams, TheMeasureSeesAStepACutAndARepeatedBorder) {
     EXPECT_TRUE(seam_statistics(repeated, Image()).duplicated_border);
 }
 
+TEST(MaterialSeams, ANormalMapThatDoesNotTileIsSeen) {
+    // Normals of a periodic height field tile; cut off a third of a period they do not.
+    const auto normals_of = [](double periods) {
+        Image n(64, 64, 3);
+        for (int y = 0; y < 64; ++y)
+            for (int x = 0; x < 64; ++x) {
+                const double sx = 0.3 * std::cos(2 * kPi * periods * x / 64), sy = 0.2 * std::cos(2 * kPi * 4 * y / 64);
+                const double len = std::sqrt(sx * sx + sy * sy + 1.0);
+                n.at(x, y, 0) = float(-sx / len), n.at(x, y, 1) = float(-sy / len), n.at(x, y, 2) = float(1.0 / len);
+            }
+        return n;
+    };
+    const SeamStatistics tiles = normal_map_wrap_statistics(normals_of(3.0));
+    const SeamStatistics cut = normal_map_wrap_statistics(normals_of(3.33));
+    EXPECT_LT(tiles.wrap_ratio_columns, kSeamLimit);
+    EXPECT_LT(tiles.wrap_ratio_rows, kSeamLimit);
+    EXPECT_GT(cut.wrap_ratio_columns, 3.0);
+    EXPECT_NEAR(cut.wrap_ratio_rows, tiles.wrap_ratio_rows, 1e-6);
+}
+
 TEST(MaterialSeams, ASeamlessMapPassesWhereverItsWrapFalls) {
     // Periodic, with its relief strongest around column 0: the wrap crosses the roughest band.
     // Every line is an ordinary line of the torus, so the wrap must not count as a seam,

@@ -117,8 +117,13 @@ constexpr double kSeamLimit = 1.2;
 /// a seam is a one-line step, and farther lines cross other content (on the shared samples,
 /// 0-8 % of ordinary lines step more than 1.2x their 2 + 2 neighbours, 0-19 % their 4 + 4).
 constexpr int kWrapBaselineLines = 2;
-/// `seams`: 1 channel, the map's size, non-zero on cut pixels (empty: cut_ratio stays 0).
+/// `seams`: 1 channel, the map's size, non-zero on cut pixels (empty: cut_ratio stays 0). The
+/// wrap's steps sum over the channels of `height` (the cut ratio uses channel 0).
 SeamStatistics seam_statistics(const Image& height, const Image& seams);
+
+/// How visible the repeats of a tangent-space normal map (3 channels, unit normals) are when it
+/// is tiled: seam_statistics of its two slopes (n_x / n_z and n_y / n_z) together; cut_ratio 0.
+SeamStatistics normal_map_wrap_statistics(const Image& normals);
 
 /// Decoded normals as a file of `bits` (8 or 16) would give them back: the reference's
 /// floor((n * 0.5 + 0.5) * (2^bits - 1)) encoding, then decoded. What a reader of the written
