@@ -7,6 +7,7 @@
 #include <tdf/core/log.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/progress.h>
+#include <tdf/core/union_find.h>
 
 #include <algorithm>
 #include <array>
@@ -235,12 +236,6 @@ struct FlattenOutcome {
     FlatChart chart;
     std::vector<std::vector<int>> parts;  // when !ok: the pieces to retry
 };
-
-int find_root(std::vector<int>& parent, int x) {
-    while (parent[std::size_t(x)] != x)
-        x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
-    return x;
-}
 
 // Cuts a chart in two across the longest axis of its face centroids' bounding box.
 std::vector<std::vector<int>> split_in_two(const Surface& s, const std::vector<int>& faces) {

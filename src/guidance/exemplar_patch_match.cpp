@@ -728,8 +728,6 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
     const int width = request.images[0].width(), height = request.images[0].height();
     const WorkingScale scale = working_scale(pixels_per_texel, width, height, m_options.patch_size);
 
-    // The cached exemplars are built here, before the images are refined in parallel (each
-    // image is independent and draws from its own seed streams, so the order does not matter).
     // The exemplar variants are built here, before the images are refined in parallel (each
     // image is independent and draws from its own seed streams, so the order does not matter).
     const std::vector<Variant>* searched = use_surface ? nullptr : &search_variants(scale.exemplar_factor);

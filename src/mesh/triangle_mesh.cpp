@@ -1,6 +1,7 @@
 #include <tdf/mesh/triangle_mesh.h>
 
 #include <tdf/core/error.h>
+#include <tdf/core/union_find.h>
 #include <tdf/mesh/uv_seams.h>
 
 #include <cmath>
@@ -45,11 +46,6 @@ Vec3f perpendicular(Vec3f n) {
 
 // The reference's clamped determinant (spec 3.3): |D| >= 1e-6, and D = 0 counts as negative.
 float clamp_determinant(float d) { return d > 0.0f ? std::max(d, 1e-6f) : std::min(d, -1e-6f); }
-
-int find_root(std::vector<int>& parent, int v) {
-    while (parent[std::size_t(v)] != v) v = parent[std::size_t(v)] = parent[std::size_t(parent[std::size_t(v)])];
-    return v;
-}
 
 // Joins, in `frame_of` (tangent vertex -> the tangent vertex whose frame it uses), the corners of
 // faces of the same handedness that meet at a position edge whose two UV corners both differ by

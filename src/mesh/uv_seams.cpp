@@ -1,5 +1,7 @@
 #include <tdf/mesh/uv_seams.h>
 
+#include <tdf/core/union_find.h>
+
 #include <algorithm>
 #include <numeric>
 #include <tuple>
@@ -51,19 +53,15 @@ EdgeContinuity uv_continuity(const TriangleMesh& mesh, const SharedEdge& e) {
 std::vector<int> uv_charts(const TriangleMesh& mesh, const std::vector<SharedEdge>& edges) {
     std::vector<int> parent(mesh.triangles.size());
     std::iota(parent.begin(), parent.end(), 0);
-    const auto root = [&](int f) {
-        while (parent[std::size_t(f)] != f) f = parent[std::size_t(f)] = parent[std::size_t(parent[std::size_t(f)])];
-        return f;
-    };
     for (const SharedEdge& e : edges)
         if (uv_continuity(mesh, e) == EdgeContinuity::Continuous) {
-            const int a = root(e.face[0]), b = root(e.face[1]);
+            const int a = find_root(parent, e.face[0]), b = find_root(parent, e.face[1]);
             parent[std::size_t(std::max(a, b))] = std::min(a, b);
         }
     std::vector<int> chart(mesh.triangles.size(), -1), number(mesh.triangles.size(), -1);
     int charts = 0;
     for (std::size_t f = 0; f < chart.size(); ++f) {
-        const int r = root(int(f));
+        const int r = find_root(parent, int(f));
         if (number[std::size_t(r)] < 0) number[std::size_t(r)] = charts++;
         chart[f] = number[std::size_t(r)];
     }

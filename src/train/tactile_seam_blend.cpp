@@ -93,7 +93,6 @@ SeamBlendStats cross_fade_tactile_seams(Image& target, const TexelAtlas& atlas, 
             }
     }
 
-    const Image laid = target;
     std::size_t blended = 0;
     for (const Nearest& n : nearest) blended += n.side >= 0 ? 1 : 0;
     stats.blended_texels = blended;
@@ -114,7 +113,7 @@ SeamBlendStats cross_fade_tactile_seams(Image& target, const TexelAtlas& atlas, 
             const Vec3f turned{dot(world, to.tangent), dot(world, frame_bitangent(to)), dot(world, to.normal)};
             const float w = 0.5f * (1.0f - n.distance / band_texels);
             float* own = target.data() + 3 * t;
-            const Vec3f mine{laid.data()[3 * t], laid.data()[3 * t + 1], laid.data()[3 * t + 2]};
+            const Vec3f mine{own[0], own[1], own[2]};  // each texel reads and writes only itself
             const Vec3f mixed = safe_normalize(mine * (1.0f - w) + safe_normalize(turned) * w);
             own[0] = mixed.x, own[1] = mixed.y, own[2] = mixed.z;
         }

@@ -153,6 +153,13 @@ Json TextureFidelity::to_json() const {
             {"flat_fraction", flat_fraction}, {"coverage", coverage}};
 }
 
+namespace {
+// The key of an unordered triangle pair.
+std::uint64_t pair_key(int a, int b) {
+    return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
+}
+}  // namespace
+
 MeshSeams::MeshSeams(const TriangleMesh& mesh, float crease_degrees) {
     const auto face_normal = [&](int f) {
         const Vec3i& t = mesh.triangles[std::size_t(f)];
@@ -167,8 +174,7 @@ MeshSeams::MeshSeams(const TriangleMesh& mesh, float crease_degrees) {
             kind = EdgeContinuity::Apart;
             ++m_crease_edges;
         }
-        const int lo = std::min(e.face[0], e.face[1]), hi = std::max(e.face[0], e.face[1]);
-        m_edges[(std::uint64_t(std::uint32_t(lo)) << 32) | std::uint32_t(hi)] = kind;
+        m_edges[pair_key(e.face[0], e.face[1])] = kind;
         m_seam_edges += kind == EdgeContinuity::Seam ? 1 : 0;
         m_cone_edges += kind == EdgeContinuity::Cone ? 1 : 0;
     }
@@ -176,8 +182,7 @@ MeshSeams::MeshSeams(const TriangleMesh& mesh, float crease_degrees) {
 
 EdgeContinuity MeshSeams::between(int triangle_a, int triangle_b) const {
     if (triangle_a == triangle_b) return EdgeContinuity::Same;
-    const int lo = std::min(triangle_a, triangle_b), hi = std::max(triangle_a, triangle_b);
-    const auto it = m_edges.find((std::uint64_t(std::uint32_t(lo)) << 32) | std::uint32_t(hi));
+    const auto it = m_edges.find(pair_key(triangle_a, triangle_b));
     return it == m_edges.end() ? EdgeContinuity::Apart : it->second;
 }
 
