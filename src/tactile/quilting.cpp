@@ -33,6 +33,7 @@ struct Grid {
     int stride = 0;   // B - O
     int canvas = 0;   // canvas side (tileable: n * stride, wrapping)
     bool wrap = false;
+    int margin = 1;   // pixels beyond its footprint that placing a block reads (seams, feathering)
 
     int origin(int i) const { return i * stride; }
     // Canvas coordinate of block-local offset `k` from origin `o`.
@@ -47,9 +48,11 @@ struct Grid {
     }
     // True when footprints starting at a and b (one axis) share pixels.
     bool intersect(int a, int b) const {
-        if (!wrap) return std::abs(a - b) < block;
+        // Placing a block reads `margin` pixels around its footprint.
+        const int reach = block + margin;
+        if (!wrap) return std::abs(a - b) < reach;
         const int d = ((b - a) % canvas + canvas) % canvas;
-        return d < block || canvas - d < block;
+        return d < reach || canvas - d < reach;
     }
 };
 
@@ -89,7 +92,10 @@ struct Scratch {
     std::vector<double> path_cost;
     std::vector<std::uint8_t> keep_old;  // B x B
     std::vector<float> strip_cost;       // B x O, one side's cost along its seam
-    std::vector<float> weight, blurred;  // B x B, weight of the new block (feathering)
+    std::vector<float> start_extra, end_extra;  // O each: cost of the seam left at a cut's ends
+    std::vector<float> weight;    // B x B, weight of the new block (feathering)
+    std::vector<float> extended;  // (B + 2 feather)^2: the weights and the ring around them
+    std::vector<float> blurred;   // B x (B + 2 feather): blurred along x
     std::vector<int> seam;
     std::vector<std::pair<int, int>> seam_pixels;  // block-local (x, y) on this block's cuts
 };
@@ -120,10 +126,13 @@ private:
 };
 
 // Minimum-cost 8-neighbour path through a rows x cols cost map, one column per row, ties to
-// the smaller column (the reference's argmin order -1, 0, +1). Writes seam[row] = column.
-void min_cut_path(const float* cost, int rows, int cols, std::vector<double>& total, std::vector<int>& seam) {
+// the smaller column (the reference's argmin order -1, 0, +1). `first_row_extra` and
+// `last_row_extra` (cols values each) add to the cost of starting or ending in a column.
+// Writes seam[row] = column.
+void min_cut_path(const float* cost, int rows, int cols, const float* first_row_extra,
+                  const float* last_row_extra, std::vector<double>& total, std::vector<int>& seam) {
     total.assign(std::size_t(rows) * std::size_t(cols), 0.0);
-    for (int c = 0; c < cols; ++c) total[std::size_t(c)] = cost[c];
+    for (int c = 0; c < cols; ++c) total[std::size_t(c)] = double(cost[c]) + double(first_row_extra[c]);
     for (int r = 1; r < rows; ++r)
         for (int c = 0; c < cols; ++c) {
             double best = total[std::size_t(r - 1) * std::size_t(cols) + std::size_t(c)];
@@ -136,7 +145,9 @@ void min_cut_path(const float* cost, int rows, int cols, std::vector<double>& to
         }
     seam.resize(std::size_t(rows));
     const double* last = &total[std::size_t(rows - 1) * std::size_t(cols)];
-    int c = int(std::min_element(last, last + cols) - last);
+    int c = 0;
+    for (int k = 1; k < cols; ++k)
+        if (last[k] + last_row_extra[k] < last[c] + last_row_extra[c]) c = k;
     seam[std::size_t(rows - 1)] = c;
     for (int r = rows - 2; r >= 0; --r) {
         const double* row = &total[std::size_t(r) * std::size_t(cols)];
@@ -159,7 +170,7 @@ public:
 private:
     void prepare_exemplar(Exemplar& e, const Image& image);
     void exclude_flat_candidates();
-    void new_block_weights(unsigned sides, Scratch& s) const;
+    void new_block_weights(int ox, int oy, unsigned sides, Scratch& s) const;
     void place_block(int row, int col, Scratch& s, double& cut_error, double& random_error);
     void search(int row, int col, unsigned sides, Scratch& s, int& chosen_exemplar, int& chosen_x,
                 int& chosen_y, double& random_error);
@@ -206,6 +217,7 @@ Quilter::Quilter(const std::vector<Image>& images, const QuiltOptions& options,
     m_grid.overlap = std::max(1, int(options.overlap * float(options.block)));
     m_grid.stride = m_grid.block - m_grid.overlap;
     m_grid.wrap = options.tileable;
+    m_grid.margin = std::max(1, options.feather);
     if (options.tileable) {
         m_grid.canvas = quilt_output_side(options);
         m_grid.n = m_grid.canvas / m_grid.stride;
@@ -476,6 +488,29 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
                 }
             s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)] = d2 / float(m_channels);
         }
+    const auto error_at = [&](int x, int y) {
+        return s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)];
+    };
+    // Error on the ring of pixels just outside the block: the exemplar's pixel there against
+    // the canvas's. False where either is missing (exemplar border, unfilled or outside canvas).
+    const auto ring_error = [&](int x, int y, float& error) {
+        const int sx = ex + x, sy = ey + y;
+        if (sx < 0 || sy < 0 || sx >= source.width() || sy >= source.height()) return false;
+        int gx = ox + x, gy = oy + y;
+        if (m_grid.wrap) {
+            gx = (gx + m_grid.canvas) % m_grid.canvas, gy = (gy + m_grid.canvas) % m_grid.canvas;
+        } else if (gx < 0 || gy < 0 || gx >= m_grid.canvas || gy >= m_grid.canvas) {
+            return false;
+        }
+        if (!m_filled[std::size_t(gy) * std::size_t(m_grid.canvas) + std::size_t(gx)]) return false;
+        float d2 = 0;
+        for (int c = 0; c < m_channels; ++c) {
+            const float d = source.at(sx, sy, c) - m_canvas.at(gx, gy, c);
+            d2 += d * d;
+        }
+        error = d2 / float(m_channels);
+        return true;
+    };
     std::fill(s.keep_old.begin(), s.keep_old.end(), 0);
     s.seam_pixels.clear();
     double seam_sum = 0;
@@ -489,16 +524,38 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
         const int offset = (side == kLeft || side == kTop) ? 0 : b - o;
         // cost(r, k): r along the seam (0..b), k across the strip (0..o).
         for (int r = 0; r < b; ++r)
+            for (int k = 0; k < o; ++k)
+                cost[std::size_t(r) * std::size_t(o) + std::size_t(k)] =
+                    vertical ? error_at(offset + k, r) : error_at(r, offset + k);
+        // Left/top strips keep the old pixels before the cut, right/bottom ones after it.
+        const bool near_side = offset == 0;
+        // The new pixels a cut leaves at either end of its strip border the old ones beyond the
+        // block there, unless a crossing strip cuts that corner: that border is a seam too (the
+        // top cut ending mid-strip at the block's right edge left a vertical step the next block
+        // kept above its own top cut).
+        const unsigned start_crossing = vertical ? kTop : kLeft, end_crossing = vertical ? kBottom : kRight;
+        for (int end = 0; end < 2; ++end) {
+            std::vector<float>& extra = end == 0 ? s.start_extra : s.end_extra;
+            std::fill(extra.begin(), extra.end(), 0.0f);
+            if (sides & (end == 0 ? start_crossing : end_crossing)) continue;
+            const int r = end == 0 ? 0 : b - 1, step = end == 0 ? -1 : 1;
             for (int k = 0; k < o; ++k) {
                 const int x = vertical ? offset + k : r, y = vertical ? r : offset + k;
-                cost[std::size_t(r) * std::size_t(o) + std::size_t(k)] =
-                    s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)];
+                float outer = 0;
+                if (!ring_error(vertical ? x : x + step, vertical ? y + step : y, outer)) continue;
+                const float seam = error_at(x, y) + outer;
+                // Cut k leaves new pixels at k.. (near side) or ..k (far side).
+                if (near_side)
+                    for (int j = 0; j <= k; ++j) extra[std::size_t(j)] += seam;
+                else
+                    for (int j = k; j < o; ++j) extra[std::size_t(j)] += seam;
             }
-        min_cut_path(cost.data(), b, o, s.path_cost, s.seam);
+        }
+        min_cut_path(cost.data(), b, o, s.start_extra.data(), s.end_extra.data(), s.path_cost, s.seam);
         for (int r = 0; r < b; ++r) {
             const int cut = s.seam[std::size_t(r)];
             s.seam_pixels.push_back(vertical ? std::pair<int, int>{offset + cut, r} : std::pair<int, int>{r, offset + cut});
-            seam_sum += cost[std::size_t(r) * std::size_t(o) + std::size_t(cut)];
+            seam_sum += vertical ? error_at(offset + cut, r) : error_at(r, offset + cut);
             ++seam_pixels;
             // Left/top: pixels before the cut stay; right/bottom: pixels after it stay.
             const int first = offset == 0 ? 0 : cut + 1, last = offset == 0 ? cut : o;
@@ -509,7 +566,7 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
         }
     }
     cut_error = seam_pixels ? seam_sum / double(seam_pixels) : 0.0;
-    new_block_weights(sides, s);
+    new_block_weights(ox, oy, sides, s);
     const std::vector<std::uint8_t>& placed = m_masks[sides];
     for (int y = 0; y < b; ++y)
         for (int x = 0; x < b; ++x) {
@@ -528,26 +585,41 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
     for (const auto& [x, y] : s.seam_pixels) m_seams.at(m_grid.at(ox, x), m_grid.at(oy, y), 0) = 1.0f;
 }
 
-void Quilter::new_block_weights(unsigned sides, Scratch& s) const {
+void Quilter::new_block_weights(int ox, int oy, unsigned sides, Scratch& s) const {
     const int b = m_grid.block, f = m_options.feather;
     for (std::size_t i = 0; i < s.weight.size(); ++i) s.weight[i] = s.keep_old[i] ? 0.0f : 1.0f;
     if (f == 0) return;  // the reference's hard cut
-    // Box-blur the cut across +-f pixels (separable, clamped to the block), only where placed
-    // pixels exist to blend with: the step a cut leaves in a height map becomes a ramp.
-    auto blur = [&](const std::vector<float>& in, std::vector<float>& out, bool along_x) {
-        for (int y = 0; y < b; ++y)
-            for (int x = 0; x < b; ++x) {
-                float sum = 0;
-                for (int d = -f; d <= f; ++d) {
-                    const int sx = along_x ? std::clamp(x + d, 0, b - 1) : x;
-                    const int sy = along_x ? y : std::clamp(y + d, 0, b - 1);
-                    sum += in[std::size_t(sy) * std::size_t(b) + std::size_t(sx)];
-                }
-                out[std::size_t(y) * std::size_t(b) + std::size_t(x)] = sum / float(2 * f + 1);
+    // Box-blur the cut across +-f pixels (separable), only where placed pixels exist to blend
+    // with: the step a cut leaves in a height map becomes a ramp. Beyond the block the weight is
+    // 0 where the canvas holds old pixels, so a cut at the block's edge is ramped like any other
+    // (clamping to the block left those cuts hard: the lines at the blocks' edges stepped 1.2x).
+    const int e = b + 2 * f;
+    for (int y = -f; y < b + f; ++y)
+        for (int x = -f; x < b + f; ++x) {
+            float w;
+            if (x >= 0 && y >= 0 && x < b && y < b) {
+                w = s.weight[std::size_t(y) * std::size_t(b) + std::size_t(x)];
+            } else {
+                int gx = ox + x, gy = oy + y;
+                if (m_grid.wrap) gx = (gx + m_grid.canvas) % m_grid.canvas, gy = (gy + m_grid.canvas) % m_grid.canvas;
+                const bool inside = gx >= 0 && gy >= 0 && gx < m_grid.canvas && gy < m_grid.canvas;
+                w = inside && m_filled[std::size_t(gy) * std::size_t(m_grid.canvas) + std::size_t(gx)] ? 0.0f : 1.0f;
             }
-    };
-    blur(s.weight, s.blurred, true);
-    blur(s.blurred, s.weight, false);
+            s.extended[std::size_t(y + f) * std::size_t(e) + std::size_t(x + f)] = w;
+        }
+    const float scale = 1.0f / float(2 * f + 1);
+    for (int y = 0; y < e; ++y)  // along x, for the block's columns
+        for (int x = 0; x < b; ++x) {
+            float sum = 0;
+            for (int d = 0; d <= 2 * f; ++d) sum += s.extended[std::size_t(y) * std::size_t(e) + std::size_t(x + d)];
+            s.blurred[std::size_t(y) * std::size_t(b) + std::size_t(x)] = sum * scale;
+        }
+    for (int y = 0; y < b; ++y)  // along y
+        for (int x = 0; x < b; ++x) {
+            float sum = 0;
+            for (int d = 0; d <= 2 * f; ++d) sum += s.blurred[std::size_t(y + d) * std::size_t(b) + std::size_t(x)];
+            s.weight[std::size_t(y) * std::size_t(b) + std::size_t(x)] = sum * scale;
+        }
     const std::vector<std::uint8_t>& placed = m_masks[sides];
     for (std::size_t i = 0; i < s.weight.size(); ++i)
         if (!placed[i]) s.weight[i] = 1.0f;
@@ -602,8 +674,12 @@ QuiltResult Quilter::run() {
         s->pixel_error.resize(std::size_t(m_grid.block) * std::size_t(m_grid.block));
         s->keep_old.resize(s->pixel_error.size());
         s->weight.resize(s->pixel_error.size());
-        s->blurred.resize(s->pixel_error.size());
+        const std::size_t extended = std::size_t(m_grid.block + 2 * m_options.feather);
+        s->extended.resize(extended * extended);
+        s->blurred.resize(extended * std::size_t(m_grid.block));
         s->strip_cost.resize(std::size_t(m_grid.block) * std::size_t(m_grid.overlap));
+        s->start_extra.resize(std::size_t(m_grid.overlap));
+        s->end_extra.resize(std::size_t(m_grid.overlap));
         return s;
     });
     std::vector<double> cut_errors(level.size()), random_errors(level.size());
