@@ -38,6 +38,13 @@ struct Grid {
     int origin(int i) const { return i * stride; }
     // Canvas coordinate of block-local offset `k` from origin `o`.
     int at(int o, int k) const { return wrap ? (o + k) % canvas : o + k; }
+    // The same for offsets around the footprint too (k < 0 or k >= block); false off a
+    // non-wrapping canvas.
+    bool around(int o, int k, int& g) const {
+        g = o + k;
+        if (wrap) g = (g % canvas + canvas) % canvas;
+        return g >= 0 && g < canvas;
+    }
     unsigned sides(int row, int col) const {
         unsigned s = 0;
         if (col > 0) s |= kLeft;
@@ -496,12 +503,8 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
     const auto ring_error = [&](int x, int y, float& error) {
         const int sx = ex + x, sy = ey + y;
         if (sx < 0 || sy < 0 || sx >= source.width() || sy >= source.height()) return false;
-        int gx = ox + x, gy = oy + y;
-        if (m_grid.wrap) {
-            gx = (gx + m_grid.canvas) % m_grid.canvas, gy = (gy + m_grid.canvas) % m_grid.canvas;
-        } else if (gx < 0 || gy < 0 || gx >= m_grid.canvas || gy >= m_grid.canvas) {
-            return false;
-        }
+        int gx = 0, gy = 0;
+        if (!m_grid.around(ox, x, gx) || !m_grid.around(oy, y, gy)) return false;
         if (!m_filled[std::size_t(gy) * std::size_t(m_grid.canvas) + std::size_t(gx)]) return false;
         float d2 = 0;
         for (int c = 0; c < m_channels; ++c) {
@@ -600,9 +603,8 @@ void Quilter::new_block_weights(int ox, int oy, unsigned sides, Scratch& s) cons
             if (x >= 0 && y >= 0 && x < b && y < b) {
                 w = s.weight[std::size_t(y) * std::size_t(b) + std::size_t(x)];
             } else {
-                int gx = ox + x, gy = oy + y;
-                if (m_grid.wrap) gx = (gx + m_grid.canvas) % m_grid.canvas, gy = (gy + m_grid.canvas) % m_grid.canvas;
-                const bool inside = gx >= 0 && gy >= 0 && gx < m_grid.canvas && gy < m_grid.canvas;
+                int gx = 0, gy = 0;
+                const bool inside = m_grid.around(ox, x, gx) && m_grid.around(oy, y, gy);
                 w = inside && m_filled[std::size_t(gy) * std::size_t(m_grid.canvas) + std::size_t(gx)] ? 0.0f : 1.0f;
             }
             s.extended[std::size_t(y + f) * std::size_t(e) + std::size_t(x + f)] = w;
