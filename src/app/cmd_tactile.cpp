@@ -472,6 +472,16 @@ void run_convert(const State& s) {
         warn.min_ratio = 0.75, warn.max_ratio = 1.35;
         for (const std::string& problem : check_material(c, warn))
             log_warning("{}: the output is {}", s.inputs[i], problem);
+        // Flatter than the region need not mean flatter than the material: say what the whole
+        // input measures when it would fail the same limit.
+        if (c.input_tilt_ratio < warn.min_ratio)
+            log_info("{}: the input as a whole measures {:.2f} of its region's detail tilt, {:.1f} % flat: the region "
+                     "leaves out {:.0f} % of it (flat gel, or smooth parts of the material); a map that keeps the "
+                     "whole input's layout measures about that",
+                     s.inputs[i],
+                     c.input_tilt_ratio,
+                     100.0 * c.input_flat,
+                     100.0 * (1.0 - c.region.fraction));
         reports.push_back(c.json());
     }
     for (std::size_t i = 0; i < s.inputs.size() && steps; ++i) {  // the input the numbers describe

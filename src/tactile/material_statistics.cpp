@@ -176,7 +176,8 @@ std::string MaterialComparison::json() const {
     return fmt::format(
         "{{\"region_fraction\": {:.4f}, \"region_mean_tilt\": {:.4f}, \"region_flat\": {:.4f}, "
         "\"out_mean_tilt\": {:.4f}, \"out_flat\": {:.4f}, \"tilt_ratio\": {:.4f}, \"distance\": {:.4f}, \"tilt_l1\": {:.3f}, "
-        "\"orientation_l1\": {:.3f}, \"scale_l1\": {:.3f}}}",
+        "\"orientation_l1\": {:.3f}, \"scale_l1\": {:.3f}, \"input_mean_tilt\": {:.4f}, \"input_flat\": {:.4f}, "
+        "\"input_tilt_ratio\": {:.4f}}}",
         region.fraction,
         region.mean_tilt,
         region.flat_fraction,
@@ -186,7 +187,10 @@ std::string MaterialComparison::json() const {
         distance,
         tilt_l1,
         orientation_l1,
-        scale_l1);
+        scale_l1,
+        input_mean_tilt,
+        input_flat,
+        input_tilt_ratio);
 }
 
 MaterialComparison compare_material(const Image& input, const Image& region, const Image& output) {
@@ -205,6 +209,10 @@ MaterialComparison compare_material(const Image& input, const Image& region, con
     c.tilt_l1 = l1(c.region.tilt_histogram, c.output.tilt_histogram);
     c.orientation_l1 = l1(c.region.orientation_histogram, c.output.orientation_histogram);
     c.scale_l1 = l1(c.region.scale_energy, c.output.scale_energy);
+    const MaterialStatistics whole = material_statistics(in, Image(), range);
+    c.input_mean_tilt = whole.mean_tilt;
+    c.input_flat = whole.flat_fraction;
+    c.input_tilt_ratio = whole.mean_tilt / std::max(c.region.mean_tilt, 1e-9);
     return c;
 }
 

@@ -143,11 +143,20 @@ TEST(MaterialStatistics, RegionDropsTheFlatGelAndDistanceSeesTheDifference) {
     EXPECT_GT(whole.flat_excess, 0.5);
     EXPECT_GT(whole.distance, 0.2);
     RecordProperty("distance_whole_vs_region", std::to_string(whole.distance));
+    // Every comparison also measures the whole input against its region: here the same map.
+    EXPECT_NEAR(whole.input_tilt_ratio, whole.tilt_ratio, 1e-9);
+    EXPECT_NEAR(whole.input_flat, whole.output.flat_fraction, 1e-9);
+    EXPECT_NEAR(whole.input_mean_tilt, whole.output.mean_tilt, 1e-9);
     // The region against itself: equal.
     const Image left = crop(n, 0, 0, 70, 200);
     const MaterialComparison same = compare_material(left, Image(70, 200, 1, 1.0f), left);
     EXPECT_NEAR(same.tilt_ratio, 1.0, 1e-9);
     EXPECT_NEAR(same.distance, 0.0, 1e-9);
+    EXPECT_NEAR(same.input_tilt_ratio, 1.0, 1e-9);
+    // The whole input does not depend on the output.
+    const MaterialComparison flat_output = compare_material(n, Image(), Image(200, 200, 3, 0.0f));
+    EXPECT_NEAR(flat_output.input_tilt_ratio, whole.input_tilt_ratio, 1e-9);
+    EXPECT_EQ(flat_output.tilt_ratio, 0.0);
     // Rotating the relief by 90 degrees keeps the tilt but not the orientation.
     Image turned(200, 200, 3);
     for (int y = 0; y < 200; ++y)

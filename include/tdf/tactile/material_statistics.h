@@ -75,6 +75,9 @@ struct MaterialComparison {
     double distance = 0;        ///< texture_distance(region, output)
     /// Its three L1 terms (each in [0, 2]): tilt, orientation and scale histograms.
     double tilt_l1 = 0, orientation_l1 = 0, scale_l1 = 0;
+    /// The whole input against its own region: what an output that copies the input's whole
+    /// layout (flat gel, or smooth parts of the material the region leaves out) would measure.
+    double input_mean_tilt = 0, input_flat = 0, input_tilt_ratio = 0;
     /// One line of JSON with the numbers (keys as the yardstick's plus distance).
     std::string json() const;
 };
