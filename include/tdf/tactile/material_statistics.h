@@ -78,7 +78,8 @@ struct MaterialComparison {
     /// The whole input against its own region: what an output that copies the input's whole
     /// layout (flat gel, or smooth parts of the material the region leaves out) would measure.
     double input_mean_tilt = 0, input_flat = 0, input_tilt_ratio = 0;
-    /// One line of JSON with the numbers (keys as the yardstick's plus distance).
+    /// One line of JSON with the numbers (keys as the yardstick's, plus the distance and its terms
+    /// and the whole input's numbers).
     std::string json() const;
 };
 
