@@ -483,18 +483,22 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
     const int b = m_grid.block, o = m_grid.overlap;
     const int ox = m_grid.origin(col), oy = m_grid.origin(row);
     const Image& source = *e.image;
-    // Per-pixel squared difference, averaged over channels, where placed pixels lie.
-    for (int y = 0; y < b; ++y)
-        for (int x = 0; x < b; ++x) {
-            float d2 = 0;
-            if (m_masks[sides][std::size_t(y) * std::size_t(b) + std::size_t(x)])
-                for (int c = 0; c < m_channels; ++c) {
-                    const float d =
-                        source.at(ex + x, ey + y, c) - m_canvas.at(m_grid.at(ox, x), m_grid.at(oy, y), c);
-                    d2 += d * d;
-                }
-            s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)] = d2 / float(m_channels);
+    // Squared difference, averaged over channels, of the exemplar's and the canvas's pixels.
+    const auto difference2 = [&](int sx, int sy, int gx, int gy) {
+        float d2 = 0;
+        for (int c = 0; c < m_channels; ++c) {
+            const float d = source.at(sx, sy, c) - m_canvas.at(gx, gy, c);
+            d2 += d * d;
         }
+        return d2 / float(m_channels);
+    };
+    // Per-pixel error where placed pixels lie.
+    for (int y = 0; y < b; ++y)
+        for (int x = 0; x < b; ++x)
+            s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)] =
+                m_masks[sides][std::size_t(y) * std::size_t(b) + std::size_t(x)]
+                    ? difference2(ex + x, ey + y, m_grid.at(ox, x), m_grid.at(oy, y))
+                    : 0.0f;
     const auto error_at = [&](int x, int y) {
         return s.pixel_error[std::size_t(y) * std::size_t(b) + std::size_t(x)];
     };
@@ -506,12 +510,7 @@ void Quilter::paste(int row, int col, unsigned sides, const Exemplar& e, int ex,
         int gx = 0, gy = 0;
         if (!m_grid.around(ox, x, gx) || !m_grid.around(oy, y, gy)) return false;
         if (!m_filled[std::size_t(gy) * std::size_t(m_grid.canvas) + std::size_t(gx)]) return false;
-        float d2 = 0;
-        for (int c = 0; c < m_channels; ++c) {
-            const float d = source.at(sx, sy, c) - m_canvas.at(gx, gy, c);
-            d2 += d * d;
-        }
-        error = d2 / float(m_channels);
+        error = difference2(sx, sy, gx, gy);
         return true;
     };
     std::fill(s.keep_old.begin(), s.keep_old.end(), 0);

@@ -109,8 +109,7 @@ SeamBlendStats cross_fade_tactile_seams(Image& target, const TexelAtlas& atlas, 
             // From the other side's tangent frame to this side's, both taken on the seam.
             const TangentFrame from = edge_frame(mesh, s.other_face, s.other_lo, s.other_hi, n.along);
             const TangentFrame to = edge_frame(mesh, s.face, s.lo, s.hi, n.along);
-            const Vec3f world = tbn_product(from, other);
-            const Vec3f turned{dot(world, to.tangent), dot(world, frame_bitangent(to)), dot(world, to.normal)};
+            const Vec3f turned = tbn_transpose_product(to, tbn_product(from, other));
             const float w = 0.5f * (1.0f - n.distance / band_texels);
             float* own = target.data() + 3 * t;
             const Vec3f mine{own[0], own[1], own[2]};  // each texel reads and writes only itself

@@ -26,4 +26,10 @@ inline Vec3f tbn_product(const TangentFrame& f, Vec3f p) {
     return f.tangent * p.x + frame_bitangent(f) * p.y + f.normal * p.z;
 }
 
+/// The transpose: the components of a world vector `v` along T, w normalize(N x T) and N (for an
+/// orthonormal frame, the tangent-space vector whose tbn_product is `v`).
+inline Vec3f tbn_transpose_product(const TangentFrame& f, Vec3f v) {
+    return {dot(f.tangent, v), dot(frame_bitangent(f), v), dot(f.normal, v)};
+}
+
 }  // namespace tdf

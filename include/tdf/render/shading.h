@@ -100,7 +100,7 @@ inline Vec3f compose_shading_normal(const TangentFrame& f, Vec3f p) {
 /// dL/dp from dL/dn_s for compose_shading_normal (the frame is a constant).
 inline Vec3f compose_shading_normal_backward(const TangentFrame& f, Vec3f p, Vec3f d_shading_normal) {
     const Vec3f d_raw = normalize_backward(tbn_product(f, p), d_shading_normal, 1e-10f);
-    return {dot(f.tangent, d_raw), dot(frame_bitangent(f), d_raw), dot(f.normal, d_raw)};
+    return tbn_transpose_product(f, d_raw);
 }
 
 /// The camera's axes in world coordinates: right, up and backward (OpenGL camera space: x right,
