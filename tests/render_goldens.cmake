@@ -10,6 +10,12 @@ target_link_libraries(tdf_make_pebble_sphere PRIVATE tdf_render tdf_warnings)
 add_test(NAME PebbleSphereAssets.MatchGenerator
          COMMAND tdf_make_pebble_sphere --check ${PROJECT_SOURCE_DIR}/scenes/pebble_sphere)
 set_tests_properties(PebbleSphereAssets.MatchGenerator PROPERTIES LABELS "render")
+# scenes/dark_bottle and scenes/painted_torus (issue 29: dark and saturated base colours).
+add_executable(tdf_make_colour_scenes ${PROJECT_SOURCE_DIR}/tools/make_colour_scenes.cpp)
+target_link_libraries(tdf_make_colour_scenes PRIVATE tdf_render tdf_warnings)
+add_test(NAME ColourScenesAssets.MatchGenerator
+         COMMAND tdf_make_colour_scenes --check ${PROJECT_SOURCE_DIR}/scenes)
+set_tests_properties(ColourScenesAssets.MatchGenerator PROPERTIES LABELS "render")
 
 file(GLOB _golden_cases CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/reference/golden/*/case.json)
 foreach(_case_file ${_golden_cases})

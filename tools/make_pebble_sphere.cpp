@@ -5,6 +5,9 @@
 //
 //   tdf_make_pebble_sphere <folder>            write sphere.obj, albedo.png, tactile_normal.png
 //   tdf_make_pebble_sphere --check <folder>    exit 1 if the folder's files differ
+#include "generator_main.h"
+#include "tileable_normal_map.h"
+
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/rng.h>
@@ -85,22 +88,6 @@ void pebble_fields(Image& height, Image& albedo) {
         }
 }
 
-// Tangent-space normals, OpenGL convention (green = +v = up the image), from central
-// differences with wrap-around; strength scales the slopes.
-Image normal_map(const Image& height, float strength) {
-    const int n = height.width();
-    Image out(n, n, 3);
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            const float dhdu = 0.5f * (height.at((x + 1) % n, y, 0) - height.at((x + n - 1) % n, y, 0));
-            // Rows grow downward, v grows upward.
-            const float dhdv = -0.5f * (height.at(x, (y + 1) % n, 0) - height.at(x, (y + n - 1) % n, 0));
-            const Vec3f nrm = safe_normalize({-strength * dhdu, -strength * dhdv, 1.f});
-            for (int c = 0; c < 3; ++c) out.at(x, y, c) = nrm[c] * 0.5f + 0.5f;  // write_png truncates
-        }
-    return out;
-}
-
 std::string sphere_obj() {
     const TriangleMesh sphere = make_uv_sphere(0.8f, 48, 24);
     std::string text = "# UV sphere, radius 0.8, 48 segments x 24 rings (tools/make_pebble_sphere.cpp)\n";
@@ -120,38 +107,11 @@ void write_all(const std::string& folder) {
     pebble_fields(height, albedo);
     write_text_atomically(folder + "/sphere.obj", sphere_obj());
     write_png(folder + "/albedo.png", albedo);
-    write_png(folder + "/tactile_normal.png", normal_map(height, 10.f));
+    write_png(folder + "/tactile_normal.png", tools::tileable_normal_map(height, 10.f));
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    try {
-        if (argc == 2) {
-            write_all(argv[1]);
-            return 0;
-        }
-        if (argc == 3 && std::string(argv[1]) == "--check") {
-            const std::string fresh = (std::filesystem::temp_directory_path() /
-                                       fmt::format("tdf_pebble_check_{}", std::uint64_t(::getpid())))
-                                          .string();
-            write_all(fresh);
-            int differ = 0;
-            for (const char* name : {"sphere.obj", "albedo.png", "tactile_normal.png"}) {
-                const std::string committed = std::string(argv[2]) + "/" + name;
-                if (!std::filesystem::exists(committed) ||
-                    read_text_file(committed) != read_text_file(fresh + "/" + name)) {
-                    std::fprintf(stderr, "%s differs from the generator's output\n", committed.c_str());
-                    ++differ;
-                }
-            }
-            std::filesystem::remove_all(fresh);
-            return differ ? 1 : 0;
-        }
-        std::fprintf(stderr, "usage: %s <folder> | --check <folder>\n", argv[0]);
-        return 2;
-    } catch (const tdf::Error& e) {
-        std::fprintf(stderr, "make_pebble_sphere: %s\n", e.what());
-        return 1;
-    }
+    return tdf::tools::generator_main(argc, argv, "make_pebble_sphere", {"sphere.obj", "albedo.png", "tactile_normal.png"}, write_all);
 }

@@ -8,6 +8,8 @@
 //   tdf_make_two_part_scene --check <folder>    exit 1 if the folder's files differ
 #include <tdf/atlas/gutter.h>
 #include <tdf/atlas/uv_raster.h>
+#include "generator_main.h"
+
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/rng.h>
@@ -142,32 +144,5 @@ void write_all(const std::string& folder) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    try {
-        if (argc == 2) {
-            write_all(argv[1]);
-            return 0;
-        }
-        if (argc == 3 && std::string(argv[1]) == "--check") {
-            const std::string fresh = (std::filesystem::temp_directory_path() /
-                                       fmt::format("tdf_two_part_check_{}", std::uint64_t(::getpid())))
-                                          .string();
-            write_all(fresh);
-            int differ = 0;
-            for (const char* name : kFiles) {
-                const std::string committed = std::string(argv[2]) + "/" + name;
-                if (!std::filesystem::exists(committed) ||
-                    read_text_file(committed) != read_text_file(fresh + "/" + name)) {
-                    std::fprintf(stderr, "%s differs from the generator's output\n", committed.c_str());
-                    ++differ;
-                }
-            }
-            std::filesystem::remove_all(fresh);
-            return differ ? 1 : 0;
-        }
-        std::fprintf(stderr, "usage: %s <folder> | --check <folder>\n", argv[0]);
-        return 2;
-    } catch (const tdf::Error& e) {
-        std::fprintf(stderr, "make_two_part_scene: %s\n", e.what());
-        return 1;
-    }
+    return tdf::tools::generator_main(argc, argv, "make_two_part_scene", std::vector<std::string>(std::begin(kFiles), std::end(kFiles)), write_all);
 }

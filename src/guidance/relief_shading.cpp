@@ -107,23 +107,27 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
             scale = magnitudes[rank];
         }
 
-        // With the input's render (GuidanceRequest::reference_images) the relief is added to what
-        // the input looks like, so repeated refinement converges to input + relief and never erases
-        // the input's own detail (faces, prints, logos); without it, to the current render.
+        // Relief detail as a RELATIVE change of the colour (issue 29): the target is the base
+        // render times (1 + f contrast k'), k' the clamped curvature minus its local mean (pure
+        // detail: the local mean colour is kept). The render is albedo x shade, so the albedo the
+        // optimizer learns from it is albedo x (1 + f contrast k') whatever the light: the light of
+        // the training views cannot leak into the albedo, dark stays dark (a black texel changes by
+        // a fraction of almost nothing) and a saturated one keeps its hue (every channel scales
+        // alike). The earlier additive form, contrast k (1 - L) toward white on ridges, learned as
+        // k / shade, lit up dark albedo most and followed the light.
+        // With the input's render (GuidanceRequest::reference_images) the change is applied to
+        // what the input looks like, so repeated refinement converges to input x (1 + relief)
+        // and never erases the input's own detail (faces, prints, logos); without it, the
+        // current render's detail is partly replaced by relief detail on its local mean.
         const bool anchored = !request.reference_images.empty() && m_options.anchor == Options::Anchor::Reference;
         const Image& base = anchored ? request.reference_images[item] : colour;
-        const Image local_mean = gaussian_blur_masked(base, mask, m_options.detail_sigma);
-        // Relief detail, high-passed at the same scale so that it does not move the local mean.
-        Image relief(colour.width(), colour.height(), 3);
-        for (std::size_t p = 0; p < colour.pixel_count(); ++p) {
-            const float k = scale > 0.0f ? std::clamp(curvature.data()[p] / scale, -m_options.curvature_limit, m_options.curvature_limit) : 0.0f;
-            for (int c = 0; c < 3; ++c) {
-                const float mean = local_mean.data()[3 * p + std::size_t(c)];
-                relief.data()[3 * p + std::size_t(c)] =
-                    m_options.contrast * k * (k >= 0.0f ? 1.0f - mean : mean);
-            }
-        }
+        Image relief(colour.width(), colour.height(), 1);
+        for (std::size_t p = 0; p < colour.pixel_count(); ++p)
+            relief.data()[p] = scale > 0.0f ? std::clamp(curvature.data()[p] / scale, -m_options.curvature_limit,
+                                                         m_options.curvature_limit)
+                                            : 0.0f;
         const Image relief_mean = gaussian_blur_masked(relief, mask, m_options.detail_sigma);
+        const Image local_mean = anchored ? Image() : gaussian_blur_masked(colour, mask, m_options.detail_sigma);
 
         Image out(colour.width(), colour.height(), 3);
         for (std::size_t p = 0; p < colour.pixel_count(); ++p) {
@@ -134,11 +138,20 @@ GuidanceResult ReliefShadingBackend::refine(const GuidanceRequest& request) {
                 dst[0] = dst[1] = dst[2] = 1.0f;
                 continue;
             }
+            const float gain = 1.0f + f * m_options.contrast * (relief.data()[p] - relief_mean.data()[p]);
             for (int c = 0; c < 3; ++c) {
                 const std::size_t i = 3 * p + std::size_t(c);
-                const float v = colour.data()[i], mean = local_mean.data()[i];
-                const float detail = relief.data()[i] - relief_mean.data()[i];
-                const float refined = anchored ? base.data()[i] + f * detail : mean + (1.0f - f) * (v - mean) + f * detail;
+                const float v = colour.data()[i];
+                float refined = 0.0f;
+                if (anchored) {
+                    refined = base.data()[i] * gain;
+                } else {
+                    // The gain acts on the local mean only: the render's own detail shrinks by
+                    // (1 - f) per call, so repeated refinement converges to L (1 + contrast k')
+                    // instead of compounding the gain.
+                    const float mean = local_mean.data()[i];
+                    refined = mean * gain + (1.0f - f) * (v - mean);
+                }
                 dst[c] = std::clamp(m * refined + (1.0f - m) * v, 0.0f, 1.0f);
             }
         }

@@ -9,6 +9,10 @@ Vec3f sample_magic3d_light(Rng& rng, Vec3f camera_position) {
     const float phi = rng.uniform(-kPi, kPi);
     const float theta = rng.uniform(kPi / 6.f, kPi / 2.f);
     const float distance = rng.uniform(3.f, 5.f);
+    return magic3d_light(camera_position, theta, phi, distance);
+}
+
+Vec3f magic3d_light(Vec3f camera_position, float theta, float phi, float distance) {
     const Vec3f z = safe_normalize(camera_position);
     Vec3f x{z.y, -z.x, 0.f};
     x = length_squared(x) < 1e-12f ? Vec3f{1.f, 0.f, 0.f} : safe_normalize(x);

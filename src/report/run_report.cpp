@@ -84,6 +84,32 @@ std::string quality_section(const RunReport& r) {
     return html + "</table>\n";
 }
 
+// Issue 29: the albedo against the input at its darkest and brightest spot, and the three
+// numbers that say whether refinement painted light into it, each beside its aim.
+std::string colour_section(const RunReport& r, const std::string& folder) {
+    if (r.colour.empty() && r.albedo_spots.empty()) return "";
+    std::string html = "<h2 id=\"colour\">Albedo against the input</h2>\n";
+    if (!r.colour.empty()) {
+        const Json aims = r.colour.value("aims", Json::object());
+        html += "<table>\n<tr><th>measure</th><th class=\"num\">final</th><th class=\"num\">aim</th>"
+                "<th>meaning</th></tr>\n";
+        for (const char* key : {"albedo_psnr_lowpass_db", "colour_geometry_correlation", "added_colour_geometry_correlation",
+                                "max_above_local_max"}) {
+            const auto it = r.colour.find(key);
+            html += fmt::format("<tr><td><code>{}</code></td><td class=\"num\">{}</td><td class=\"num\">{}</td>"
+                                "<td class=\"meaning\">{}</td></tr>\n",
+                                key, html_escape(it == r.colour.end() ? "-" : format_json_value(*it)),
+                                html_escape(aims.value(key, "")), html_escape(quality_meaning(key)));
+        }
+        html += "</table>\n";
+    }
+    html += "<div class=\"figures\">\n";
+    for (const ReportImage& spot : r.albedo_spots)
+        html += fmt::format("<figure>{}<figcaption>{}</figcaption></figure>\n", image_tag(spot.path, folder, spot.caption),
+                            html_escape(spot.caption));
+    return html + "</div>\n";
+}
+
 // First, end-of-matching and last value of every loss term: the numbers behind the plot.
 std::string loss_table(const RunReport& r) {
     if (!r.losses.is_array() || r.losses.empty()) return "";
@@ -177,8 +203,18 @@ std::string quality_meaning(const std::string& key) {
          "L1 distance between the tilt histograms of the learned normals and of the tactile map: 0 = the "
          "relief has "
          "the texture's statistics wherever it lies (lower is better)."},
+        {"added_colour_geometry_correlation",
+         "the same correlation on what the run added (learned minus input albedo): whether the colour the "
+         "refinement put in follows the relief, whatever prints the input carries (0 = nothing added)."},
         {"target_tilt_distance",
          "the same distance for the training target itself: the floor tactile_tilt_distance can reach."},
+        {"albedo_psnr_lowpass_db",
+         "PSNR (dB) of the exported albedo against the input's, texel by texel after a 2-texel Gaussian on "
+         "both: refinement may add fine relief-aligned colour, but the colour at a glance must stay the input's."},
+        {"max_above_local_max",
+         "how far the brightest channel of any texel rises above the brightest the input had within 4 texels "
+         "of it (same chart): light painted into the albedo shows here; 0 = nothing brighter than its "
+         "neighbourhood."},
         {"held_out_views", "number of held-out visual views the numbers are measured on."},
         {"held_out_patches", "number of held-out tactile patches the numbers are measured on."},
     };
@@ -196,7 +232,7 @@ void write_run_report(const std::string& html_path, const RunReport& r) {
         html_escape(r.scene_path));
     body +=
         "<nav class=\"card\"><a href=\"#turntables\">turntables</a> &middot; <a href=\"#viewer\">3D view</a> "
-        "&middot; <a href=\"#quality\">quality</a> &middot; <a href=\"#maps\">maps</a> &middot; <a "
+        "&middot; <a href=\"#quality\">quality</a> &middot; <a href=\"#colour\">albedo vs input</a> &middot; <a href=\"#maps\">maps</a> &middot; <a "
         "href=\"#losses\">losses</a> &middot; <a href=\"#timings\">timings</a> &middot; <a "
         "href=\"#config\">configuration</a></nav>\n";
 
@@ -215,6 +251,8 @@ void write_run_report(const std::string& html_path, const RunReport& r) {
     }
 
     body += "<h2 id=\"quality\">Quality (held-out views and patches)</h2>\n" + quality_section(r);
+
+    body += colour_section(r, folder);
 
     body += "<h2 id=\"maps\">Exported maps</h2>\n<div class=\"figures\">\n";
     for (const ReportImage& m : r.maps)

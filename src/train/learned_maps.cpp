@@ -45,14 +45,32 @@ void LearnedMaps::set_residual_to(const Image& albedo, const Image& normal) {
     });
 }
 
+void LearnedMaps::set_albedo_bounds(Image low, Image high) {
+    const int size = m_atlas->size;
+    TDF_CHECK(low.empty() == high.empty());
+    TDF_CHECK(low.empty() || (low.width() == size && low.height() == size && low.channels() == 3 &&
+                              high.width() == size && high.height() == size && high.channels() == 3));
+    m_albedo_low = std::move(low);
+    m_albedo_high = std::move(high);
+}
+
 void LearnedMaps::update() {
     const TexelAtlas& a = *m_atlas;
+    const bool bounded = !m_albedo_low.empty();
     parallel_for(a.covered_count(), kTexelGrain, [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
             const std::size_t t = a.texels[k];
-            const float* r = m_residual.data() + k * kResidualPerTexel;
+            float* r = m_residual.data() + k * kResidualPerTexel;
             for (int c = 0; c < 3; ++c) {
-                m_albedo_level0.data()[3 * t + std::size_t(c)] = m_field_outputs[k].albedo[c] + r[c];
+                const std::size_t i = 3 * t + std::size_t(c);
+                float albedo = m_field_outputs[k].albedo[c] + r[c];
+                if (bounded && (albedo < m_albedo_low.data()[i] || albedo > m_albedo_high.data()[i])) {
+                    // Projected gradient descent: the residual is the optimizer's state, so it
+                    // moves onto the bound with the map.
+                    albedo = std::clamp(albedo, m_albedo_low.data()[i], m_albedo_high.data()[i]);
+                    r[c] = albedo - m_field_outputs[k].albedo[c];
+                }
+                m_albedo_level0.data()[i] = albedo;
                 m_normal_level0.data()[3 * t + std::size_t(c)] = m_field_outputs[k].normal[c] + r[3 + c];
             }
         }

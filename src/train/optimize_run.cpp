@@ -7,10 +7,12 @@
 #include <tdf/core/progress.h>
 #include <tdf/guidance/exemplar_patch_match.h>
 #include <tdf/guidance/schedule.h>
+#include <tdf/io/image_io.h>
 #include <tdf/parts/part_target.h>
 #include <tdf/optim/checkpoint.h>
 #include <tdf/render/scene_assets.h>
 #include <tdf/tactile/tactile_map.h>
+#include <tdf/train/albedo_spots.h>
 #include <tdf/train/asset_export.h>
 #include <tdf/train/part_gating.h>
 #include <tdf/train/run_report.h>
@@ -129,9 +131,41 @@ Json texture_space_quality(const Trainer& trainer) {
     const BakedMaps maps = trainer.export_maps();
     std::vector<std::uint8_t> covered(atlas->texel_count(), 0);
     for (std::uint32_t t : atlas->texels) covered[t] = 1;
-    return measure_texture_fidelity(maps.albedo, trainer.albedo_target(), maps.tactile_normal,
-                                    trainer.tactile_target(), covered)
-        .to_json();
+    Json quality = measure_texture_fidelity(maps.albedo, trainer.albedo_target(), maps.tactile_normal,
+                                            trainer.tactile_target(), covered)
+                       .to_json();
+    // Issue 29: light painted into the albedo shows as texels brighter than anything near them
+    // in the input (or darker than anything near them).
+    quality["albedo_local_range"] = trainer.albedo_range_excess(maps.albedo).to_json();
+    return quality;
+}
+
+// Issue 29's three numbers against their aims, and the spot crops the report page shows (input |
+// after matching | final at the input's darkest and brightest spot, `<base>_albedo_spot_*.png`).
+Json colour_check(const Trainer& trainer, const Image& final_albedo, const Image& matched_albedo,
+                  const std::string& base, const QualityReport& quality, const Json& texture) {
+    const Json& range = texture["albedo_local_range"];
+    Json colour = {
+        {"albedo_psnr_lowpass_db", texture["albedo_psnr_lowpass_db"]},
+        {"colour_geometry_correlation", quality.colour_geometry_correlation},
+        {"added_colour_geometry_correlation", quality.added_colour_geometry_correlation},
+        {"max_above_local_max", range["max_above_local_max"]},
+        {"aims", {{"albedo_psnr_lowpass_db", ">= 33"}, {"added_colour_geometry_correlation", ">= 0.4"},
+                  {"max_above_local_max", "<= 0.05"}}},
+        {"spots", Json::array()}};
+    if (matched_albedo.empty()) return colour;  // no matching phase: nothing to set beside the final
+    const Image& input = trainer.albedo_target();
+    const int window = std::max(8, input.width() / 16);
+    for (const AlbedoSpot& spot : find_albedo_spots(input, trainer.texel_charts(), window)) {
+        const std::string file = fmt::format("{}_albedo_spot_{}.png", base, spot.name);
+        write_png(file, albedo_spot_strip(spot, input, matched_albedo, final_albedo, std::max(1, 256 / window)));
+        colour["spots"].push_back({{"name", spot.name},
+                                   {"file", std::filesystem::path(file).filename().string()},
+                                   {"texel", {spot.x, spot.y}},
+                                   {"size", spot.size},
+                                   {"input_luminance", spot.luminance}});
+    }
+    return colour;
 }
 
 const Json& section(const SceneDescription& d, const char* name) {
@@ -298,6 +332,7 @@ void run_optimize(const OptimizeOptions& options) {
                     {"hard_cut_step_degrees", b.hard_step_degrees},
                     {"band_detail_ratio", b.band_detail_ratio}};
     };
+    Image matched_albedo;  // the after-matching albedo, for the report's spot crops (issue 29)
     ProgressReporter progress("optimize", std::size_t(config.iterations), 10);
     // Texture evaluation: a matching iteration fits the grid on texels (no rendering), a
     // refinement iteration renders 8 views and calls guidance: measured about 12x the cost.
@@ -330,6 +365,7 @@ void run_optimize(const OptimizeOptions& options) {
             progress.finish();
             const BakedMaps matched_maps = trainer.export_maps();
             write_asset(options.output_dir, name, "_initialized", matched_maps, export_mesh, config);
+            matched_albedo = matched_maps.albedo;
             // The issue's quality measure is taken here, after the matching phase.
             const QualityReport matched = trainer.evaluate_held_out();
             Json initialized = {{"quality", matched.to_json()}, {"iteration", done}};
@@ -362,7 +398,10 @@ void run_optimize(const OptimizeOptions& options) {
                          {"seconds_total", progress.elapsed_seconds()},
                          {"seed", description.seed},
                          {"threads", ThreadLimit::current()}};
-    if (const Json texture = texture_space_quality(trainer); !texture.is_null()) report["texture_space"] = texture;
+    if (const Json texture = texture_space_quality(trainer); !texture.is_null()) {
+        report["texture_space"] = texture;
+        report["colour"] = colour_check(trainer, maps.albedo, matched_albedo, base, quality, texture);
+    }
     if (parts) {
         // The label head's prediction at the texels (the exported label map) and the segmentation's.
         const PartSegmentation& seg = parts->segmentation;

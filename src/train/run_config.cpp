@@ -4,6 +4,7 @@
 #include <tdf/guidance/guidance_backend.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace tdf {
 
@@ -70,6 +71,25 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.patch_distance = r.get("patch_distance", c.patch_distance);
     c.max_ssaa = r.get("max_ssaa", c.max_ssaa);
     c.learning_rate = r.get("learning_rate", c.learning_rate);
+    if (r.has("training_light")) {
+        const Json& light = r.raw("training_light");
+        if (light.is_string() && light.get<std::string>() == "random") {
+            c.fixed_training_light = false;
+        } else if (light.is_object()) {
+            ConfigReader lr(light, source + ": optimize.training_light");
+            c.fixed_training_light = true;
+            c.light_elevation_degrees = lr.get("elevation_degrees", c.light_elevation_degrees);
+            c.light_azimuth_degrees = lr.get("azimuth_degrees", c.light_azimuth_degrees);
+            c.light_distance = lr.get("distance", c.light_distance);
+            lr.check_all_read();
+        } else {
+            throw_error("{}: optimize.training_light must be \"random\" or an object "
+                        "{{\"elevation_degrees\", \"azimuth_degrees\", \"distance\"}}", source);
+        }
+    }
+    c.albedo_range_radius = r.get("albedo_range_radius", c.albedo_range_radius);
+    c.albedo_range_lighten = r.get("albedo_range_lighten", c.albedo_range_lighten);
+    c.albedo_range_darken = r.get("albedo_range_darken", c.albedo_range_darken);
     c.checkpoint_every = r.get("checkpoint_every", c.checkpoint_every);
     c.held_out_views = r.get("held_out_views", c.held_out_views);
     c.held_out_patches = r.get("held_out_patches", c.held_out_patches);
@@ -159,6 +179,19 @@ void RunConfig::validate(const std::string& source) const {
     if (!(max_ssaa >= 1.0f && max_ssaa <= 4.0f))
         throw_error("{}: optimize.max_ssaa must be in [1, 4], got {}", source, max_ssaa);
     if (gutter < 0) throw_error("{}: export.gutter must be >= 0, got {}", source, gutter);
+    if (albedo_range_radius < 0 || albedo_range_radius > 64)
+        throw_error("{}: optimize.albedo_range_radius must be in [0, 64] texels (0 = no bound), got {}", source,
+                    albedo_range_radius);
+    if (!(albedo_range_lighten >= 0.0f && albedo_range_lighten <= 1.0f))
+        throw_error("{}: optimize.albedo_range_lighten must be in [0, 1], got {}", source, albedo_range_lighten);
+    if (!(albedo_range_darken >= 0.0f && albedo_range_darken <= 1.0f))
+        throw_error("{}: optimize.albedo_range_darken must be in [0, 1], got {}", source, albedo_range_darken);
+    if (fixed_training_light &&
+        !(light_elevation_degrees >= 0.0f && light_elevation_degrees <= 90.0f && std::isfinite(light_azimuth_degrees) &&
+          light_distance > 0.0f && light_distance <= 100.0f))
+        throw_error("{}: optimize.training_light needs elevation_degrees in [0, 90], a finite azimuth_degrees and "
+                    "distance in (0, 100]",
+                    source);
     if (checkpoint_every < 0) throw_error("{}: optimize.checkpoint_every must be >= 0", source);
     if (held_out_views < 0 || held_out_patches < 0) throw_error("{}: held-out counts must be >= 0", source);
     if (turntable_views < 0) throw_error("{}: export.turntable_views must be >= 0", source);
@@ -200,6 +233,13 @@ Json RunConfig::to_json() const {
         {"patch_distance", patch_distance},
         {"max_ssaa", max_ssaa},
         {"learning_rate", learning_rate},
+        {"training_light", fixed_training_light ? Json{{"elevation_degrees", light_elevation_degrees},
+                                                       {"azimuth_degrees", light_azimuth_degrees},
+                                                       {"distance", light_distance}}
+                                                : Json("random")},
+        {"albedo_range_radius", albedo_range_radius},
+        {"albedo_range_lighten", albedo_range_lighten},
+        {"albedo_range_darken", albedo_range_darken},
         {"checkpoint_every", checkpoint_every},
         {"held_out_views", held_out_views},
         {"held_out_patches", held_out_patches},

@@ -86,6 +86,18 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
     if (exists(base + "_report.json")) {
         Json report = load_json_file(base + "_report.json");
         r.quality.push_back({"final", report.value("quality", Json::object())});
+        if (report.contains("colour")) {
+            r.colour = report["colour"];
+            for (const Json& spot : r.colour.value("spots", Json::array())) {
+                const std::string path = folder + "/" + spot.value("file", "");
+                if (exists(path))
+                    r.albedo_spots.push_back(
+                        {fmt::format("{} spot (input luminance {:.2f}): input | after matching | final",
+                                     spot.value("name", ""), spot.value("input_luminance", 0.0)),
+                         path});
+            }
+            report.erase("colour");
+        }
         report.erase("quality");
         r.timings = report;
     }

@@ -194,6 +194,14 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
         m_albedo_target_texture = MipTexture(m_albedo_target);
         m_tactile_target_texture = MipTexture(m_tactile_target);
         m_maps = std::make_unique<LearnedMaps>(*m_atlas);
+        m_texel_charts = atlas_texel_charts(*m_atlas, *target.mesh);
+        if (config.albedo_range_radius > 0) {
+            // The refinement's colour bound (issue 29): the input's local range, widened.
+            ColourRange bound = local_colour_range(m_albedo_target, m_texel_charts, config.albedo_range_radius);
+            for (float& v : bound.low.values()) v -= config.albedo_range_darken;
+            for (float& v : bound.high.values()) v += config.albedo_range_lighten;
+            m_maps->set_albedo_bounds(std::move(bound.low), std::move(bound.high));
+        }
         // Adam state for the residual only when it is Adam's to update (the Jacobi step has none).
         if (config.residual_optimizer == "adam")
             m_residual_adam = std::make_unique<Adam>(m_maps->residual().size(), hyper);
@@ -310,6 +318,12 @@ void Trainer::prepare_maps() {
     m_maps->set_residual_to(m_albedo_target, m_tactile_target);
     m_maps->update();
     m_maps_ready = true;
+}
+
+RangeExcess Trainer::albedo_range_excess(const Image& albedo) const {
+    TDF_CHECK(texture_space());
+    const ColourRange input = local_colour_range(m_albedo_target, m_texel_charts, kRangeMeasureRadius);
+    return measure_range_excess(albedo, input, m_texel_charts, kRangeMeasureRadius, kRangeMeasureLimit);
 }
 
 BakedMaps Trainer::export_maps() const {
@@ -592,6 +606,9 @@ void Trainer::sample_cameras(Rng& rng) {
         }
         b.cameras[std::size_t(P + k)] = v.camera;
         b.lights[std::size_t(k)] = sample_magic3d_light(rng, v.camera.position);
+        if (cfg.fixed_training_light)  // drawn anyway: the same views as with the random light
+            b.lights[std::size_t(k)] = magic3d_light(v.camera.position, radians(cfg.light_elevation_degrees),
+                                                     radians(cfg.light_azimuth_degrees), cfg.light_distance);
     }
 }
 
@@ -1165,11 +1182,11 @@ QualityReport Trainer::evaluate_held_out() const {
     const RunConfig& cfg = m_config;
     const TriangleMesh& mesh = *m_target.mesh;
     QualityReport report;
-    double squared = 0, max_error = 0, alignment = 0;
+    double squared = 0, max_error = 0, alignment = 0, added_alignment = 0;
     const MeshSeams mesh_seams(mesh);
     std::size_t values_fg = 0, values_full = 0;
     GBuffer g;
-    std::vector<FieldOutputs> outputs, inputs;
+    std::vector<FieldOutputs> outputs, inputs, added;
     // The seam measures of one view's learned maps and of the input's own (its albedo through its
     // UVs; in texture space also the tactile map laid over the atlas, sampled as the learned map is).
     struct ViewSeams {
@@ -1181,17 +1198,24 @@ QualityReport Trainer::evaluate_held_out() const {
         trace_and_evaluate(camera, g, outputs);
         if (scored) values_full += 3 * g.pixel_count();  // background: white in both, zero error (spec 5.2)
         inputs.resize(outputs.size());
+        added.resize(outputs.size());
         std::size_t q = 0;
         for (std::size_t p = 0; p < g.pixel_count(); ++p) {
             if (g.mask[p] <= 0.0f) continue;
             FieldOutputs& input = inputs[q];
             input.albedo = sample_albedo(*m_target.material, mesh, g, p, true);
             input.normal = Vec3f{0, 0, 1};
+            // What the run added (issue 29): against the input as the learned map samples it
+            // (the atlas bake through the same taps), so resampling is not counted as added.
+            added[q] = outputs[q];
+            added[q].albedo = outputs[q].albedo - input.albedo;
             if (texture_space()) {
                 TrilinearTaps taps;
-                m_tactile_target_texture.taps(g.uv[p], m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]),
-                                              -1, taps);
+                const float lod = m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]);
+                m_tactile_target_texture.taps(g.uv[p], lod, -1, taps);
                 input.normal = safe_normalize(gather3(m_tactile_target_texture, taps));
+                m_albedo_target_texture.taps(g.uv[p], lod, -1, taps);
+                added[q].albedo = outputs[q].albedo - gather3(m_albedo_target_texture, taps);
             }
             const Vec3f e = outputs[q++].albedo - input.albedo;
             if (!scored) continue;
@@ -1203,7 +1227,13 @@ QualityReport Trainer::evaluate_held_out() const {
         }
         const LearnedImages learned = learned_images(camera, g, outputs);
         const LearnedImages input = learned_images(camera, g, inputs);
-        if (scored) alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
+        if (scored) {
+            alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
+            // Without the input's own detail (prints, label edges), which must stay and would
+            // otherwise dominate the measure on a printed asset.
+            added_alignment +=
+                colour_geometry_correlation(learned_images(camera, g, added).albedo, learned.view_normals, learned.mask);
+        }
         seams.albedo.add(g, learned.albedo, mesh_seams);
         seams.input_albedo.add(g, input.albedo, mesh_seams);
         seams.normal.add(g, learned.view_normals, mesh_seams);
@@ -1236,6 +1266,7 @@ QualityReport Trainer::evaluate_held_out() const {
     report.albedo_psnr_full = psnr(squared, values_full);
     report.albedo_max_error = max_error;
     report.colour_geometry_correlation = cfg.held_out_views > 0 ? alignment / cfg.held_out_views : 0.0;
+    report.added_colour_geometry_correlation = cfg.held_out_views > 0 ? added_alignment / cfg.held_out_views : 0.0;
     report.views = cfg.held_out_views;
 
     double cosine_sum = 0;
@@ -1284,6 +1315,7 @@ Json QualityReport::to_json() const {
             {"albedo_max_error", albedo_max_error},
             {"tactile_mean_cosine", tactile_mean_cosine},
             {"colour_geometry_correlation", colour_geometry_correlation},
+            {"added_colour_geometry_correlation", added_colour_geometry_correlation},
             {"tactile_tilt_distance", tactile_tilt_distance},
             {"target_tilt_distance", target_tilt_distance},
             {"seam_jump_ratio_albedo", seam_jump_ratio_albedo},

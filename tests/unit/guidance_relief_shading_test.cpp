@@ -142,6 +142,69 @@ TEST(GuidanceReliefShading, StrongCreasesAreNotFlattenedToPlateaus) {
     EXPECT_THROW(ReliefShadingBackend::Options::from_json(Json{{"curvature_limit", 0.5}}), Error);
 }
 
+TEST(GuidanceReliefShading, ReliefIsARelativeChangeThatIgnoresTheShade) {
+    // Issue 29. The render is albedo x shade; the optimizer learns target / shade. Two renders of
+    // one albedo under different shades must give the same target / shade, a near-black colour
+    // must stay near black, and a saturated one must keep its hue (every channel scaled alike).
+    // The red is one that no shade here pushes past 1 in the render (there the render's [0, 1]
+    // clamp differs per shade; in training the albedo bound, albedo_range.h, holds those texels).
+    const Image normals = normals_of_height(relief(7), kSize);
+    Image albedo(kSize, kSize, 3);
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            const Vec3f c = x < kSize / 2 ? Vec3f{0.03f, 0.03f, 0.035f} : Vec3f{0.50f, 0.025f, 0.03f};
+            for (int ch = 0; ch < 3; ++ch) albedo.at(x, y, ch) = c[ch];
+        }
+    const auto learned_albedo = [&](float shade) {
+        Image render = albedo;
+        for (float& v : render.values()) v *= shade;
+        GuidanceRequest r;
+        r.kind = GuidanceKind::Visual;
+        r.strength = 0.5;
+        r.images = {render};
+        r.reference_images = {render};
+        r.control = {to_bae_control(normals)};
+        r.masks = {Image(kSize, kSize, 1, 1.0f)};
+        Image out = ReliefShadingBackend({}).refine(r).refined[0];
+        for (float& v : out.values()) v /= shade;
+        return out;
+    };
+    const Image dim = learned_albedo(0.55f), bright = learned_albedo(0.9f);
+    double largest_change = 0;
+    for (int y = 2; y < kSize - 2; ++y)
+        for (int x = 2; x < kSize - 2; ++x) {
+            for (int c = 0; c < 3; ++c) {
+                ASSERT_NEAR(dim.at(x, y, c), bright.at(x, y, c), 1e-5f) << x << "," << y;
+                largest_change = std::max(largest_change, double(std::fabs(bright.at(x, y, c) - albedo.at(x, y, c))));
+            }
+            if (x < kSize / 2) {
+                EXPECT_LT(bright.at(x, y, 0), 0.06f);  // black stays black
+            } else {
+                // Hue: red / green and red / blue ratios as in the input.
+                EXPECT_NEAR(bright.at(x, y, 0) / bright.at(x, y, 1), 0.50f / 0.025f, 1e-2f);
+                EXPECT_NEAR(bright.at(x, y, 0) / bright.at(x, y, 2), 0.50f / 0.03f, 1e-2f);
+            }
+        }
+    EXPECT_GT(largest_change, 0.05) << "the relief must change the colour somewhere";
+}
+
+TEST(GuidanceReliefShading, ContrastZeroKeepsTheInput) {
+    GuidanceRequest r;
+    r.kind = GuidanceKind::Visual;
+    r.strength = 0.5;
+    Image colour(kSize, kSize, 3);
+    Rng rng(3);
+    for (float& v : colour.values()) v = rng.uniform();
+    r.images = {colour};
+    r.reference_images = {colour};
+    r.control = {to_bae_control(normals_of_height(relief(9), kSize))};
+    r.masks = {Image(kSize, kSize, 1, 1.0f)};
+    const Image out = ReliefShadingBackend(ReliefShadingBackend::Options::from_json(Json{{"contrast", 0.0}}))
+                          .refine(r)
+                          .refined[0];
+    for (std::size_t i = 0; i < out.values().size(); ++i) ASSERT_EQ(out.values()[i], colour.values()[i]);
+}
+
 TEST(GuidanceReliefShading, ColourGeometryAlignmentRisesOverARun) {
     const Image normals = normals_of_height(relief(3), kSize);
     const Image mask = disc_mask();

@@ -16,17 +16,18 @@
 ///     foreground pixels (|k| > 1e-3 per pixel) and clamped to [-limit, limit]
 ///     (`curvature_limit`; so the effect does not depend on resolution or relief height; a flat
 ///     surface gets no relief).
-///  3. The render c is split into its local mean L (mask-weighted Gaussian, `detail_sigma`
-///     pixels) and detail c - L. The relief detail is R = contrast k (1 - L) on ridges and
-///     contrast k L in cavities, minus its own local mean (so it is pure detail and the local
-///     mean colour is kept).
+///  3. The relief detail k' is that normalised curvature minus its own local mean (mask-weighted
+///     Gaussian, `detail_sigma` pixels): pure detail, so the local mean colour is kept.
 ///  4. With f = denoise_fraction(strength) (0.5 -> 0.3 over the visual schedule: more noise lets
-///     the prior replace more of the input, spec 5.4). When the request carries the input's render
-///     (reference_images, `anchor: reference`, the default) L and R are taken from it and
-///     c' = reference + f R: the input's own detail (faces, prints, logos) stays and only
-///     relief-aligned detail is added, where the relief is curved (issue 10 goal 2). Otherwise
-///     c' = L + (1 - f)(c - L) + f R, which replaces part of the render's detail. Either way
-///     repeated refinement converges instead of compounding. Clamped to [0, 1].
+///     the prior replace more of the input, spec 5.4), the relief is a RELATIVE change of the
+///     colour, gain = 1 + f contrast k' (issue 29). When the request carries the input's render
+///     (reference_images, `anchor: reference`, the default) c' = reference x gain: the input's own
+///     detail (faces, prints, logos) stays and only relief-aligned variation is added, where the
+///     relief is curved (issue 10 goal 2). Otherwise c' = L x gain + (1 - f)(c - L) with L the
+///     render's local mean, which replaces part of the render's detail. Either way repeated
+///     refinement converges instead of compounding. Clamped to [0, 1]. Because the render is
+///     albedo x shade, the albedo learned from c' is the input's albedo x gain whatever the light
+///     of the view, dark stays dark and every channel scales alike (the hue is kept).
 ///  5. Blend by coverage: out = m c' + (1 - m) c; pixels with mask exactly 0 are white (spec 5.4).
 #include <tdf/guidance/guidance_backend.h>
 
@@ -37,8 +38,10 @@ public:
     static constexpr const char* kName = "relief_shading";
 
     struct Options {
-        /// "contrast": relief detail at curvature +-1, as a fraction of the way from the local
-        /// mean colour to white (ridges) or black (cavities). [0, 1].
+        /// "contrast": how strong the relief-aligned colour is: the relative change of the colour
+        /// at normalised curvature +-1 and full denoising (gain 1 +- contrast), [0, 1]; 0 = off
+        /// (the refinement then keeps the input's colour). Scenes set it as
+        /// guidance.relief_shading.contrast.
         float contrast = 0.35f;
         /// "detail_sigma": scale separating the local mean colour from detail, pixels (> 0).
         float detail_sigma = 3.0f;

@@ -29,6 +29,9 @@ inline Vec3f shading_normal_unnormalized(Vec3f T, Vec3f N, float w, Vec3f p) {
 /// to z_l gives the same light distribution (phi is uniform), so only the roll of the sample
 /// changes. Returns the world-space light position.
 Vec3f sample_magic3d_light(Rng& rng, Vec3f camera_position);
+/// The light of that frame at given angles (radians) and distance, without a draw: the sample
+/// above is magic3d_light(camera_position, theta, phi, d) at its drawn values.
+Vec3f magic3d_light(Vec3f camera_position, float theta, float phi, float distance);
 
 /// The one diffuse shade of both renderers: ambient + (1 - ambient) max(0, n . l) for a unit
 /// direction l toward the light. The visualizer's ambient is --ambient_light_ratio (0.1, spec

@@ -35,6 +35,10 @@ struct RunReport {
     std::vector<std::string> turntable_passes{"albedo", "lambertian", "tactile_normal"};
     std::vector<TurntableStage> turntables;  ///< rows, e.g. input, after matching, final
     std::vector<ReportImage> maps;           ///< exported maps (PNG), shown at 256 px, linked
+    /// The albedo against the input (issue 29): `_report.json`'s "colour" object (three numbers
+    /// with their aims) and its spot strips (input | after matching | final), shown full size.
+    Json colour = Json::object();
+    std::vector<ReportImage> albedo_spots;
     std::string loss_plot_svg;               ///< an SVG file inlined in the page; empty: none
     Json losses = Json::array();             ///< the `_losses.jsonl` objects, in order
     int init_iterations = 0;                 ///< end of the matching phase (a column of the loss table)

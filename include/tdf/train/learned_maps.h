@@ -34,7 +34,14 @@ public:
     /// on every covered texel: r = target - field (call after evaluate_field).
     void set_residual_to(const Image& albedo, const Image& normal);
     /// Composes field + residual into the level-0 maps, fills the gutter and rebuilds the mips.
+    /// With albedo bounds set, each covered texel's albedo is first projected into them per
+    /// channel and its residual moved with it (r = clamp(field + r) - field), so what training
+    /// renders see, what the optimizer continues from and what is exported are the same values.
     void update();
+    /// Per texel (size x size, RGB): the albedo may not leave [low, high] (albedo_range.h: the
+    /// input's local range widened by a tolerance). Empty images remove the bound. The bound must
+    /// hold the current maps' targets (the matching phase's end stays exact).
+    void set_albedo_bounds(Image low, Image high);
 
     const MipTexture& albedo() const { return m_albedo; }
     const MipTexture& normal() const { return m_normal; }
@@ -69,6 +76,7 @@ private:
     std::vector<FieldOutputs> m_field_outputs;
     FieldCache m_cache;
     Image m_albedo_level0, m_normal_level0;
+    Image m_albedo_low, m_albedo_high;  ///< empty: no bound
     Image m_step_scratch;  ///< jacobi_step's smoothing buffer (kept: no allocation per iteration)
     MipTexture m_albedo, m_normal;
 };

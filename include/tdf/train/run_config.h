@@ -88,6 +88,23 @@ struct RunConfig {
     /// mips at the view's footprint either way, and SSAA would cost up to 4x their pixels.
     float max_ssaa = 1.0f;
     float learning_rate = 0.01f;    ///< Adam lr (spec 4.4)
+    /// The training views' point light ("optimize.training_light"): "random" (the reference's
+    /// magic3d draw per view, spec 3.4) or an object {"elevation_degrees", "azimuth_degrees",
+    /// "distance"} that fixes it in every view's magic3d frame (theta, phi, d of
+    /// magic3d_light); the random draw is still made, so the views are the same either way.
+    /// What the refinement learns must not depend on it (issue 29's light test).
+    bool fixed_training_light = false;
+    float light_elevation_degrees = 60.0f, light_azimuth_degrees = 0.0f, light_distance = 4.0f;
+    /// The refinement's colour bound (albedo_range.h, issue 29): every albedo texel stays within
+    /// the input albedo's per-channel range over the (2 r + 1)^2 texels of its chart around it,
+    /// widened by `lighten` above and `darken` below ("optimize.albedo_range_radius" r, 0 = no
+    /// bound; "optimize.albedo_range_lighten", "optimize.albedo_range_darken"). Nothing gets
+    /// brighter than its neighbourhood by more than `lighten` (no highlight can be painted in,
+    /// dark stays dark, a saturated colour cannot turn pale); cavities may darken further, which
+    /// is what relief-aligned colour mostly is.
+    int albedo_range_radius = 1;
+    float albedo_range_lighten = 0.04f;
+    float albedo_range_darken = 0.15f;
     LossWeights weights;
     TactileGuidanceLoss tactile_guidance_loss = TactileGuidanceLoss::Cosine;  ///< paper; Mse = code
     int checkpoint_every = 50;      ///< iterations between checkpoints (0 = only at phase ends)

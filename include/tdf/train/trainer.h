@@ -25,6 +25,7 @@
 #include <tdf/render/renderer.h>
 #include <tdf/scene/camera.h>
 #include <tdf/scene/embree_scene.h>
+#include <tdf/train/albedo_range.h>
 #include <tdf/train/loss_log.h>
 #include <tdf/train/learned_maps.h>
 #include <tdf/train/run_config.h>
@@ -74,6 +75,10 @@ struct QualityReport {
     /// Colour-geometry alignment of the learned albedo and normals (colour_geometry_correlation,
     /// mean over the held-out views): what visual guidance raises (issue 6).
     double colour_geometry_correlation = 0;
+    /// The same measure on what the run added (learned minus input albedo, issue 29): whether the
+    /// colour the refinement put in follows the relief, whatever prints the input carries. 0 when
+    /// nothing was added.
+    double added_colour_geometry_correlation = 0;
     /// How exemplar-like the learned relief is, whatever its position (what tactile guidance
     /// lowers, issue 6): L1 distance between the tilt histograms (relief_statistics.h) of the
     /// learned tangent-space normals at the held-out patch hits and of the tactile map's texels.
@@ -180,6 +185,12 @@ public:
     const TexelAtlas* texel_atlas() const { return m_atlas.get(); }
     const Image& albedo_target() const { return m_albedo_target; }
     const Image& tactile_target() const { return m_tactile_target; }
+    /// How far `albedo` (size x size RGB, e.g. export_maps().albedo) leaves the input albedo's
+    /// local range (albedo_range.h, radius kRangeMeasureRadius, limit kRangeMeasureLimit), over
+    /// the covered texels (texture evaluation only).
+    RangeExcess albedo_range_excess(const Image& albedo) const;
+    /// Per texel its UV chart, -1 in the gutter (texture evaluation only; albedo_range.h).
+    const std::vector<int>& texel_charts() const { return m_texel_charts; }
     /// What cross_fade_tactile_seams did to the tactile target (zeros per pixel or with a band of 0).
     const SeamBlendStats& tactile_seam_blend() const { return m_seam_blend; }
     /// Multi-part: the part the label head predicts (argmax of its logits at each covered
@@ -249,6 +260,7 @@ private:
     std::unique_ptr<TexelAtlas> m_atlas;
     std::unique_ptr<LearnedMaps> m_maps;
     Image m_albedo_target, m_tactile_target;
+    std::vector<int> m_texel_charts;  ///< per texel its UV chart, -1 in the gutter (albedo_range.h)
     SeamBlendStats m_seam_blend;
     MipTexture m_albedo_target_texture;   // the input albedo over the atlas, as renders sample it
     MipTexture m_tactile_target_texture;  // the tactile target over the atlas, likewise
