@@ -9,7 +9,7 @@ if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends \
-  build-essential cmake ninja-build pkg-config git \
+  build-essential cmake ninja-build pkg-config git ccache \
   libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libcgal-dev libeigen3-dev \
   libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev libfftw3-dev nlohmann-json3-dev libcli11-dev \
   libfmt-dev libtinygltf-dev libpng-dev libjpeg-dev zlib1g-dev chromium \

@@ -8,9 +8,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=${TDF_JOBS:-$(nproc)}
 if [ "${TDF_SKIP_INSTALL:-0}" != 1 ]; then bash scripts/install-deps.sh; fi
-
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DTDF_WERROR=ON >/dev/null
-cmake --build build -j"$JOBS"
+bash scripts/build.sh
+# The sanitizer build below goes through the same cache (scripts/build.sh).
+LAUNCHER=()
+if command -v ccache >/dev/null; then
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
+  LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
 ctest --test-dir build --output-on-failure -j"$JOBS" -LE slow
 
 if [ "${TDF_SKIP_SANITIZE:-0}" != 1 ]; then
@@ -24,7 +28,7 @@ if [ "${TDF_SKIP_SANITIZE:-0}" != 1 ]; then
   # sanitizers' instrumentation g++ 12 reports false -Wmaybe-uninitialized inside <regex>.
   # Cost: README "Robustness".
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g1" \
-    -DTDF_SANITIZE=ON -DTDF_BUILD_BENCH=OFF -DTDF_WERROR=OFF -DCGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE=TRUE >/dev/null
+    -DTDF_SANITIZE=ON -DTDF_BUILD_BENCH=OFF -DTDF_WERROR=OFF -DCGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE=TRUE "${LAUNCHER[@]}" >/dev/null
   cmake --build build-asan -j"$JOBS"
   ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 \
     UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

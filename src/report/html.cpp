@@ -66,6 +66,7 @@ img.thumb { width: 96px; height: 96px; object-fit: contain; background: #fff; bo
 .error-line { font-family: ui-monospace, monospace; font-size: 12px; color: var(--fail); max-width: 520px; }
 .compare-row { display: flex; gap: 12px; flex-wrap: wrap; align-items: flex-start; }
 .compare-row figure img { image-rendering: pixelated; }
+figure img.strip { width: auto; height: auto; max-width: 100%; image-rendering: pixelated; }
 .legend { display: inline-block; width: 160px; height: 10px; vertical-align: middle; border: 1px solid var(--line);
           background: linear-gradient(to right, #000004, #420a68, #932667, #dd513a, #fca50a, #fcffa4); }
 )css";

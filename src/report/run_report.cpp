@@ -91,22 +91,26 @@ std::string colour_section(const RunReport& r, const std::string& folder) {
     std::string html = "<h2 id=\"colour\">Albedo against the input</h2>\n";
     if (!r.colour.empty()) {
         const Json aims = r.colour.value("aims", Json::object());
+        const Json met = r.colour.value("met", Json::object());
         html += "<table>\n<tr><th>measure</th><th class=\"num\">final</th><th class=\"num\">aim</th>"
-                "<th>meaning</th></tr>\n";
+                "<th>met</th><th>meaning</th></tr>\n";
         for (const char* key : {"albedo_psnr_lowpass_db", "colour_geometry_correlation", "added_colour_geometry_correlation",
                                 "max_above_local_max"}) {
             const auto it = r.colour.find(key);
+            const auto verdict = met.find(key);
             html += fmt::format("<tr><td><code>{}</code></td><td class=\"num\">{}</td><td class=\"num\">{}</td>"
-                                "<td class=\"meaning\">{}</td></tr>\n",
+                                "<td>{}</td><td class=\"meaning\">{}</td></tr>\n",
                                 key, html_escape(it == r.colour.end() ? "-" : format_json_value(*it)),
-                                html_escape(aims.value(key, "")), html_escape(quality_meaning(key)));
+                                html_escape(aims.value(key, "")),
+                                verdict == met.end() ? "" : verdict->get<bool>() ? "yes" : "<b>no</b>",
+                                html_escape(quality_meaning(key)));
         }
         html += "</table>\n";
     }
     html += "<div class=\"figures\">\n";
     for (const ReportImage& spot : r.albedo_spots)
-        html += fmt::format("<figure>{}<figcaption>{}</figcaption></figure>\n", image_tag(spot.path, folder, spot.caption),
-                            html_escape(spot.caption));
+        html += fmt::format("<figure>{}<figcaption>{}</figcaption></figure>\n",
+                            image_tag(spot.path, folder, spot.caption, "strip"), html_escape(spot.caption));
     return html + "</div>\n";
 }
 

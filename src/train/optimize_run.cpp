@@ -145,13 +145,18 @@ Json texture_space_quality(const Trainer& trainer) {
 Json colour_check(const Trainer& trainer, const Image& final_albedo, const Image& matched_albedo,
                   const std::string& base, const QualityReport& quality, const Json& texture) {
     const Json& range = texture["albedo_local_range"];
+    const double lowpass = texture["albedo_psnr_lowpass_db"].get<double>();
+    const double above = range["max_above_local_max"].get<double>();
     Json colour = {
-        {"albedo_psnr_lowpass_db", texture["albedo_psnr_lowpass_db"]},
+        {"albedo_psnr_lowpass_db", lowpass},
         {"colour_geometry_correlation", quality.colour_geometry_correlation},
         {"added_colour_geometry_correlation", quality.added_colour_geometry_correlation},
-        {"max_above_local_max", range["max_above_local_max"]},
+        {"max_above_local_max", above},
         {"aims", {{"albedo_psnr_lowpass_db", ">= 33"}, {"added_colour_geometry_correlation", ">= 0.4"},
                   {"max_above_local_max", "<= 0.05"}}},
+        {"met", {{"albedo_psnr_lowpass_db", lowpass >= 33.0},
+                 {"added_colour_geometry_correlation", quality.added_colour_geometry_correlation >= 0.4},
+                 {"max_above_local_max", above <= kRangeMeasureLimit}}},
         {"spots", Json::array()}};
     if (matched_albedo.empty()) return colour;  // no matching phase: nothing to set beside the final
     const Image& input = trainer.albedo_target();

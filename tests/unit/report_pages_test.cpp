@@ -137,6 +137,31 @@ TEST(ReportCompare, WritesPreviewsAndHeatmapsAndPutsFailuresFirst) {
     EXPECT_LT(html.find("missing.exr"), html.find("equal.exr")) << "problems are failures too";
 }
 
+TEST(ReportRun, ShowsTheAlbedoAgainstTheInputWithItsAims) {
+    // Issue 29: the three numbers beside their aims, whether each is met, and the spot strips.
+    const std::string folder = fresh_folder("colour");
+    write_png(folder + "/ball_albedo_spot_dark.png", gradient(8, 0.1f));
+    RunReport r;
+    r.name = "ball";
+    r.colour = {{"albedo_psnr_lowpass_db", 38.25},
+                {"added_colour_geometry_correlation", 0.31},
+                {"max_above_local_max", 0.04},
+                {"aims", {{"albedo_psnr_lowpass_db", ">= 33"}, {"added_colour_geometry_correlation", ">= 0.4"}}},
+                {"met", {{"albedo_psnr_lowpass_db", true}, {"added_colour_geometry_correlation", false}}}};
+    r.albedo_spots.push_back({"dark spot: input | after matching | final", folder + "/ball_albedo_spot_dark.png"});
+    write_run_report(folder + "/ball_report.html", r);
+    const std::string html = read_text_file(folder + "/ball_report.html");
+    const auto row = [&](const std::string& key) {
+        const auto at = html.find("<code>" + key + "</code></td><td class=\"num\">", html.find("id=\"colour\""));
+        return at == std::string::npos ? std::string() : html.substr(at, html.find("</tr>", at) - at);
+    };
+    EXPECT_NE(row("albedo_psnr_lowpass_db").find(">38.25<"), std::string::npos);
+    EXPECT_NE(row("albedo_psnr_lowpass_db").find("&gt;= 33</td><td>yes<"), std::string::npos);
+    EXPECT_NE(row("added_colour_geometry_correlation").find("<b>no</b>"), std::string::npos);
+    EXPECT_NE(html.find("src=\"ball_albedo_spot_dark.png\""), std::string::npos);
+    EXPECT_NE(html.find("class=\"strip\""), std::string::npos) << "strips are shown at their own size";
+}
+
 TEST(ReportRun, EmbedsTheModelAndLinksEveryImage) {
     const std::string folder = fresh_folder("run");
     const TriangleMesh mesh = make_uv_sphere(1.0f, 16, 8);
