@@ -229,7 +229,7 @@ TEST(MaterialRealSize, PatchPngPreviewReadsBackInMillimetres) {
     EXPECT_LT(worst, (*hi - *lo) / 65535.0 + 1e-5);
 }
 
-TEST(MaterialFlattening, LowReliefIsRescaledByStrengthAutoOrKeptWithSixteenBits) {
+TEST(MaterialFlattening, LowReliefKeepsItsSlopesWithSixteenBits) {
     // A veneer-like relief: mean detail tilt about 0.8 degrees.
     const Image n = sine_normals(160, 12, 0.0425);
     const std::string path = test::scratch_dir() + "/veneer.png";
@@ -239,12 +239,9 @@ TEST(MaterialFlattening, LowReliefIsRescaledByStrengthAutoOrKeptWithSixteenBits)
     const HeightMap patch = extract_patch(input, PatchOptions{}, &steps);
     const MaterialStatistics in = material_statistics(detail_slopes(steps.input_normals), Image(), 5.0);
     EXPECT_NEAR(in.mean_tilt, 0.8, 0.15);
-    // auto: scaled to 8 degrees (documented rule).
-    const float g = auto_strength(patch, Amplitude::Auto);
-    const Image scaled = normal_map_from_height(patch, Amplitude::Auto, g);
-    EXPECT_NEAR(material_statistics(detail_slopes(quantized_normals(scaled, 8)), Image(), 30.0).mean_tilt,
-                kAutoStrengthTilt,
-                0.1 * kAutoStrengthTilt);
+    // auto: a normal map's slopes are known, so they are kept however gentle (issue 28; the
+    // rule before scaled this one to 8 degrees).
+    EXPECT_EQ(auto_strength(patch, Amplitude::Auto), 1.0f);
     // strength 1 at 16 bits keeps the relief; 8 bits would not.
     const Image kept = normal_map_from_height(patch, Amplitude::Auto, 1.0f);
     const MaterialComparison sixteen = compare_material(steps.input_normals, Image(), quantized_normals(kept, 16));
@@ -253,6 +250,24 @@ TEST(MaterialFlattening, LowReliefIsRescaledByStrengthAutoOrKeptWithSixteenBits)
     RecordProperty("veneer_ratio_8", std::to_string(eight.tilt_ratio));
     EXPECT_NEAR(sixteen.tilt_ratio, 1.0, 0.15);
     EXPECT_GT(std::abs(eight.tilt_ratio - 1.0), 0.1);
+}
+
+TEST(MaterialFlattening, HeightImageOfUnknownSizeIsScaledByStrengthAuto) {
+    // The same relief as a grey height image without a size: its slopes have no scale, so
+    // auto gives its textured region kAutoStrengthTilt degrees.
+    Image height(160, 160, 1);
+    for (int y = 0; y < 160; ++y)
+        for (int x = 0; x < 160; ++x) height.at(x, y, 0) = float(0.5 + 0.5 * std::sin(2 * kPi * x / 12.0));
+    const std::string path = test::scratch_dir() + "/unknown_size_height.png";
+    write_png(path, height, 16, Quantize::Round);
+    const HeightMap patch = extract_patch(load_height_input(path), PatchOptions{});
+    ASSERT_FALSE(slopes_known(patch, Amplitude::Auto));
+    const float g = auto_strength(patch, Amplitude::Auto);
+    EXPECT_NE(g, 1.0f);
+    const Image scaled = normal_map_from_height(patch, Amplitude::Auto, g);
+    EXPECT_NEAR(material_statistics(detail_slopes(quantized_normals(scaled, 8)), Image(), 30.0).mean_tilt,
+                kAutoStrengthTilt,
+                0.1 * kAutoStrengthTilt);
 }
 
 TEST(MaterialSeams, TheMeasureSeesAStepACutAndARepeatedBorder) {
