@@ -469,12 +469,12 @@ void run_convert(const State& s) {
         const bool known = slopes_known(patches[i], s.normal.mode());
         compared[i] = compared_input_normals(figures[i], patches[i], s.normal.mode(), strength);
         const MaterialComparison c = compare_material(compared[i], figures[i].region, decoded);
-        log_info("{}: input {}region {:.1f} %: mean detail tilt {:.2f} deg, {:.1f} % flat; output {:.2f} deg, {:.1f} % "
-                 "flat; tilt ratio {:.3f}; texture distance {:.3f}",
+        log_info("{}: input's {}mean detail tilt {:.2f} deg (textured region {:.1f} %, {:.1f} % flat); output {:.2f} deg, "
+                 "{:.1f} % flat; tilt ratio {:.3f}; texture distance {:.3f}",
                  s.inputs[i],
-                 known ? "" : fmt::format("at strength {:.3g} (slopes unknown), ", strength),
-                 100.0 * c.region.fraction,
+                 known ? "own " : fmt::format("(slopes unknown, taken at strength {:.3g}) ", strength),
                  c.region.mean_tilt,
+                 100.0 * c.region.fraction,
                  100.0 * c.region.flat_fraction,
                  c.output.mean_tilt,
                  100.0 * c.output.flat_fraction,
