@@ -332,6 +332,18 @@ struct State {
     CLI::Option* optimize_iterations = nullptr;
 };
 
+/// Says when auto smoothing narrowed the window (PatchOptions::smooth).
+void log_smoothing(const std::string& input, const PatchSteps& steps, const PatchOptions& options) {
+    if (steps.full_window_tilt_loss <= 0) return;
+    log_info("{}: smoothing with {}: the {} px window would take {:.0f} % of the contact region's detail tilt (at "
+             "most {:.0f} %)",
+             input,
+             steps.bilateral_diameter > 0 ? fmt::format("a {} px window", steps.bilateral_diameter) : "none",
+             options.bilateral_diameter,
+             100.0 * steps.full_window_tilt_loss,
+             100.0 * kSmoothingMaxTiltLoss);
+}
+
 void run_height(const State& s) {
     const HeightInput input = s.input.load(s.in);
     write_heights(s.out, input.map);
@@ -339,7 +351,9 @@ void run_height(const State& s) {
 }
 
 void run_patch(const State& s) {
-    const HeightMap patch = extract_patch(s.input.load(s.in), s.patch.resolved());
+    PatchSteps steps;
+    const HeightMap patch = extract_patch(s.input.load(s.in), s.patch.resolved(), &steps);
+    log_smoothing(s.in, steps, s.patch.resolved());
     write_heights(s.out, patch);
     log_info("wrote {} ({}x{}, textured region {:.1f} %, height range {} mm)",
              s.out,
@@ -399,14 +413,7 @@ void run_convert(const State& s) {
                  100.0 * mask_fraction(figures[i].region),
                  figures[i].contact_mask.empty() ? "local detail tilt" : "contact mask",
                  100.0 * mask_fraction(patches.back().texture_mask));
-        if (figures[i].full_window_tilt_loss > 0)
-            log_info("{}: smoothing with a {} px window: the {} px one would take {:.0f} % of the contact region's detail "
-                     "tilt (at most {:.0f} %)",
-                     s.inputs[i],
-                     figures[i].bilateral_diameter,
-                     patch_options.bilateral_diameter,
-                     100.0 * figures[i].full_window_tilt_loss,
-                     100.0 * kSmoothingMaxTiltLoss);
+        log_smoothing(s.inputs[i], figures[i], patch_options);
         if (!steps) continue;
         const std::string prefix = s.inputs.size() > 1 ? fmt::format("input{}_", i) : "";
         const PatchSteps& f = figures[i];
