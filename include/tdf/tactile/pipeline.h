@@ -71,7 +71,8 @@ struct PatchSteps {
 /// inputs keep their whole extent), resampling. The result is in mm (or pixel widths, see
 /// HeightMap::pixel_heights) with minimum 0; mm_per_pixel follows the resampling;
 /// texture_mask is the region inside the patch. reference_scale_mm is the crop's height range
-/// (spec 6.2 step 6) for captures (.npz/.npy), else 0 (physical amplitude). Throws tdf::Error
+/// (spec 6.2 step 6) for captures (.npz/.npy), else 0 (physical amplitude); captures also get
+/// reference_mm_per_pixel, the capture's pixel size. Throws tdf::Error
 /// (naming the input) for an empty contact mask or a flat patch (range <= 1e-6 mm).
 HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, PatchSteps* steps = nullptr);
 
@@ -90,7 +91,11 @@ HeightMap optimize_height_maps(const std::vector<HeightMap>& patches, const Heig
 
 enum class Amplitude {
     Auto,       ///< Reference when the map has a reference_scale_mm, else Physical
-    Reference,  ///< spec 6.4 step 3: slopes = height_mm * k(scale) per pixel
+    /// spec 6.4 step 3: slopes = height_mm * k(scale) per pixel of the capture
+    /// (HeightMap::reference_mm_per_pixel; per pixel of the map when that is 0). The reference
+    /// counts per pixel of its resampled 256 px patch, which lost slopes wherever the contact
+    /// crop was smaller (issue 28).
+    Reference,
     Physical,   ///< slopes = height_mm / mm_per_pixel: the true surface at its real size
 };
 
