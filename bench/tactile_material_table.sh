@@ -12,10 +12,13 @@ inputs=()
 for f in "$DATA"/tactile/texture_samples/*.png; do inputs+=("$f"); done
 inputs+=("$DATA/heightmaps/Leather031_2K-JPG/Leather031_2K_Displacement.jpg"
          "$DATA/heightmaps/Fabric048_2K-JPG/Fabric048_2K_Displacement.jpg"
-         "$DATA/tactile/gelsight_groove_scan/heightmap.tmd")
+         "$DATA/tactile/gelsight_groove_scan/heightmap.tmd"
+         "$DATA/tactile/gelsight_raw/strawberry_00000_gxgy.npz")
+# More inputs (e.g. the issue-28 ones from tdf_make_tactile_unseen_inputs) as $EXTRA, space-separated.
+for f in ${EXTRA:-}; do inputs+=("$f"); done
 for f in "${inputs[@]}"; do
   name=$(basename "${f%.*}")
-  line=$("$BUILD/tdf" tactile convert "$f" -o "$OUT/$name.png" --steps-png "$OUT/${name}_steps" "$@" 2>&1 | grep "input region")
+  line=$("$BUILD/tdf" tactile convert "$f" -o "$OUT/$name.png" --steps-png "$OUT/${name}_steps" "$@" 2>&1 | grep "tilt ratio")
   stats=$(cat "$OUT/${name}_steps/8_statistics.json")
   check=""
   if [ -n "${CHECK:-}" ]; then

@@ -200,8 +200,8 @@ struct NormalArgs {
             ->capture_default_str();
         app->add_option("--strength",
                         strength,
-                        "factor on the slopes, or auto: 1 when the slopes are known and the textured "
-                        "region's mean detail tilt is >= 2 degrees, else the factor giving 8 degrees")
+                        "factor on the slopes, or auto: 1 when the slopes are known (normal maps, captures, "
+                        "inputs of known size), else the factor giving the textured region 8 degrees")
             ->check(CLI::Validator(
                 [](std::string& text) -> std::string {
                     // "auto", or a finite positive number (CLI11's PositiveNumber lets NaN through).
@@ -232,10 +232,9 @@ struct NormalArgs {
         if (strength != "auto") return std::stof(strength);
         const float g = auto_strength(exemplar, mode());
         if (g != 1.0f)
-            log_info("{}: --strength auto scales the slopes by {:.3g} ({})",
+            log_info("{}: --strength auto scales the slopes by {:.3g} (pixel size unknown, so slopes unknown)",
                      exemplar.source,
-                     g,
-                     slopes_known(exemplar, mode()) ? "low relief" : "pixel size unknown, so slopes unknown");
+                     g);
         return g;
     }
     /// The PNG bit depth for `normals` (decoded floats).
@@ -333,6 +332,18 @@ struct State {
     CLI::Option* optimize_iterations = nullptr;
 };
 
+/// Says when auto smoothing narrowed the window (PatchOptions::smooth).
+void log_smoothing(const std::string& input, const PatchSteps& steps, const PatchOptions& options) {
+    if (steps.full_window_tilt_loss <= 0) return;
+    log_info("{}: smoothing with {}: the {} px window would take {:.0f} % of the contact region's detail tilt (at "
+             "most {:.0f} %)",
+             input,
+             steps.bilateral_diameter > 0 ? fmt::format("a {} px window", steps.bilateral_diameter) : "none",
+             options.bilateral_diameter,
+             100.0 * steps.full_window_tilt_loss,
+             100.0 * kSmoothingMaxTiltLoss);
+}
+
 void run_height(const State& s) {
     const HeightInput input = s.input.load(s.in);
     write_heights(s.out, input.map);
@@ -340,7 +351,9 @@ void run_height(const State& s) {
 }
 
 void run_patch(const State& s) {
-    const HeightMap patch = extract_patch(s.input.load(s.in), s.patch.resolved());
+    PatchSteps steps;
+    const HeightMap patch = extract_patch(s.input.load(s.in), s.patch.resolved(), &steps);
+    log_smoothing(s.in, steps, s.patch.resolved());
     write_heights(s.out, patch);
     log_info("wrote {} ({}x{}, textured region {:.1f} %, height range {} mm)",
              s.out,
@@ -400,6 +413,7 @@ void run_convert(const State& s) {
                  100.0 * mask_fraction(figures[i].region),
                  figures[i].contact_mask.empty() ? "local detail tilt" : "contact mask",
                  100.0 * mask_fraction(patches.back().texture_mask));
+        log_smoothing(s.inputs[i], figures[i], patch_options);
         if (!steps) continue;
         const std::string prefix = s.inputs.size() > 1 ? fmt::format("input{}_", i) : "";
         const PatchSteps& f = figures[i];
@@ -455,18 +469,23 @@ void run_convert(const State& s) {
     const int bits = png ? s.normal.resolve_bits(output) : 32;
     const Image decoded = png ? quantized_normals(output, bits) : output;
     std::vector<std::string> reports;
+    std::vector<Image> compared(s.inputs.size());
     for (std::size_t i = 0; i < s.inputs.size(); ++i) {
-        const MaterialComparison c =
-            compare_material(scale_normal_slopes(figures[i].input_normals, strength), figures[i].region, decoded);
-        log_info("{}: input region {:.1f} %: mean detail tilt {:.2f} deg, {:.1f} % flat; output {:.2f} deg "
-                 "({:.0f} %), {:.1f} % flat; texture distance {:.3f}",
+        // The input's own slopes where they are known: a strength other than 1 shows as a
+        // steeper or flatter output, not as an input that changed with it (issue 28).
+        const bool known = slopes_known(patches[i], s.normal.mode());
+        compared[i] = compared_input_normals(figures[i], patches[i], s.normal.mode(), strength);
+        const MaterialComparison c = compare_material(compared[i], figures[i].region, decoded);
+        log_info("{}: input's {}mean detail tilt {:.2f} deg (textured region {:.1f} %, {:.1f} % flat); output {:.2f} deg, "
+                 "{:.1f} % flat; tilt ratio {:.3f}; texture distance {:.3f}",
                  s.inputs[i],
-                 100.0 * c.region.fraction,
+                 known ? "own " : fmt::format("(slopes unknown, taken at strength {:.3g}) ", strength),
                  c.region.mean_tilt,
+                 100.0 * c.region.fraction,
                  100.0 * c.region.flat_fraction,
                  c.output.mean_tilt,
-                 100.0 * c.tilt_ratio,
                  100.0 * c.output.flat_fraction,
+                 c.tilt_ratio,
                  c.distance);
         MaterialLimits warn;  // "much" flatter or less similar: the yardstick's limits
         warn.min_ratio = 0.75, warn.max_ratio = 1.35;
@@ -482,12 +501,17 @@ void run_convert(const State& s) {
                      c.input_tilt_ratio,
                      100.0 * c.input_flat,
                      100.0 * (1.0 - c.region.fraction));
-        reports.push_back(c.json());
+        // The comparison's keys, then how the input was taken (README "tdf tactile": report keys).
+        const std::string json = c.json();
+        reports.push_back(fmt::format("{}, \"strength\": {:.4g}, \"input_slopes_known\": {}}}",
+                                      json.substr(0, json.size() - 1),
+                                      strength,
+                                      known));
     }
     for (std::size_t i = 0; i < s.inputs.size() && steps; ++i) {  // the input the numbers describe
         const std::string prefix = s.inputs.size() > 1 ? fmt::format("input{}_", i) : "";
         write_normal_map(step_path(prefix + "0_input_normal.png"),
-                         scale_normal_slopes(figures[i].input_normals, strength),
+                         compared[i],
                          patches[i].mm_per_pixel,
                          s.inputs[i],
                          png ? bits : 16);

@@ -99,6 +99,7 @@ HeightInput load_image(const std::string& path, const HeightInputOptions& option
     HeightInput input;
     input.map.mm_per_pixel = metadata_float(metadata, kMetaMmPerPixel, path);
     input.map.reference_scale_mm = metadata_float(metadata, kMetaReferenceScale, path);
+    input.map.reference_mm_per_pixel = metadata_float(metadata, kMetaReferencePixel, path);
     ImageKind kind = options.image_kind;
     if (kind == ImageKind::Auto) kind = is_grey(image) ? ImageKind::Height : ImageKind::Normal;
     const bool exr = lower_extension(path) == ".exr";
@@ -121,6 +122,7 @@ HeightInput load_image(const std::string& path, const HeightInputOptions& option
         input.normals = normals.normals;
         // Integrated heights are in pixel widths; mm need the pixel size (set below).
         input.map.reference_scale_mm = 0;
+        input.map.reference_mm_per_pixel = 0;
     }
     return input;
 }

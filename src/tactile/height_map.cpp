@@ -11,6 +11,8 @@ ImageMetadata height_map_metadata(const HeightMap& map) {
     ImageMetadata metadata;
     metadata[kMetaMmPerPixel] = map.mm_per_pixel > 0 ? fmt::format("{}", map.mm_per_pixel) : kUnknown;
     if (map.reference_scale_mm > 0) metadata[kMetaReferenceScale] = fmt::format("{}", map.reference_scale_mm);
+    if (map.reference_mm_per_pixel > 0)
+        metadata[kMetaReferencePixel] = fmt::format("{}", map.reference_mm_per_pixel);
     if (!map.source.empty()) metadata[kMetaSource] = map.source;
     if (map.pixel_heights) metadata[kMetaHeightUnit] = "pixel";
     if (map.tileable) metadata[kMetaTileable] = "1";
@@ -48,6 +50,7 @@ HeightMap read_height_map(const std::string& path) {
     if (!map.height.all_finite()) throw_error("{}: the height map contains NaN or infinite values", path);
     map.mm_per_pixel = metadata_float(metadata, kMetaMmPerPixel, path);
     map.reference_scale_mm = metadata_float(metadata, kMetaReferenceScale, path);
+    map.reference_mm_per_pixel = metadata_float(metadata, kMetaReferencePixel, path);
     apply_height_metadata(metadata, map);
     map.source = path;
     return map;

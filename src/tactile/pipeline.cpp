@@ -56,7 +56,7 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
     }
     // The reference smooths captures; other inputs keep their finest detail (a 5 px bilateral
     // with the reference's sigmas is nearly a box filter, which flattens fine relief).
-    const bool smooth = options.smooth == Toggle::On || (options.smooth == Toggle::Auto && input.capture);
+    bool smooth = options.smooth == Toggle::On || (options.smooth == Toggle::Auto && input.capture);
     const bool contact = options.contact == Toggle::On || (options.contact == Toggle::Auto && input.capture);
     Image filtered;
     switch (high_pass) {
@@ -71,10 +71,6 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
             filtered = raw.height;
             break;
     }
-    Image smoothed =
-        smooth
-            ? bilateral_filter(filtered, options.bilateral_diameter, options.sigma_color, options.sigma_space)
-            : filtered;
     int x = 0, y = 0, width = raw.height.width(), height = raw.height.height();
     Image mask, region;
     if (contact) {
@@ -82,6 +78,31 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
         x = found.x, y = found.y, width = height = found.side;
         mask = std::move(found.mask);
         region = mask;
+    }
+    int diameter = smooth ? options.bilateral_diameter : 0;
+    Image smoothed = smooth ? bilateral_filter(filtered, diameter, options.sigma_color, options.sigma_space) : filtered;
+    double full_window_loss = 0;
+    if (smooth && options.smooth == Toggle::Auto) {
+        // The window must be small against the texture's period: narrow it until the smoothing
+        // takes at most kSmoothingMaxTiltLoss of the contact region's detail tilt.
+        const auto [crop_lo, crop_hi] = value_range(crop(filtered, x, y, width, height));
+        const float gain = reference_amplitude_factor(crop_hi - crop_lo);
+        const double before =
+            material_statistics(detail_slopes(normals_from_height(filtered, gain)), mask, 90.0).mean_tilt;
+        auto loss = [&](const Image& candidate) {
+            const double after =
+                material_statistics(detail_slopes(normals_from_height(candidate, gain)), mask, 90.0).mean_tilt;
+            return before > 0 ? 1.0 - after / before : 0.0;
+        };
+        double current = loss(smoothed);
+        if (current > kSmoothingMaxTiltLoss) full_window_loss = current;
+        while (current > kSmoothingMaxTiltLoss && diameter > 1) {
+            diameter -= 2;
+            smoothed = diameter > 1 ? bilateral_filter(filtered, diameter, options.sigma_color, options.sigma_space)
+                                    : filtered;
+            current = diameter > 1 ? loss(smoothed) : 0.0;
+        }
+        if (diameter <= 1) diameter = 0, smooth = false;
     }
     Image patch = crop(smoothed, x, y, width, height);
     // Matches reference: the amplitude `scale` is the crop's range before resampling (spec 6.2 step 6).
@@ -95,7 +116,7 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
     out.pixel_heights = raw.pixel_heights;
     // Only captures take the reference's amplitude rule; every other input keeps its true
     // slopes (normal_map_from_height, Amplitude::Auto).
-    if (input.capture) out.reference_scale_mm = hi - lo;
+    if (input.capture) out.reference_scale_mm = hi - lo, out.reference_mm_per_pixel = raw.mm_per_pixel;
     out.mm_per_pixel = raw.mm_per_pixel;
 
     // The input's normals at the patch's amplitude (strength 1), and where its texture lies.
@@ -124,6 +145,8 @@ HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, P
         steps->contact_mask = mask;
         steps->high_passed = filtered;
         steps->smoothed = smooth ? smoothed : Image();
+        steps->bilateral_diameter = diameter;
+        steps->full_window_tilt_loss = full_window_loss;
         steps->patch = out.height;
         steps->region = std::move(region);
         steps->input_normals = std::move(input_normals);
@@ -138,6 +161,7 @@ HeightMap quilt_height_maps(const std::vector<HeightMap>& patches, const QuiltOp
     std::vector<std::string> names;
     HeightMap out;
     out.mm_per_pixel = patches[0].mm_per_pixel;
+    out.reference_mm_per_pixel = patches[0].reference_mm_per_pixel;  // their pixels agree within 1 %
     out.pixel_heights = patches[0].pixel_heights;
     out.source = patches[0].source;
     for (const HeightMap& p : patches) {
@@ -198,6 +222,9 @@ Image normal_map_from_height(const HeightMap& map, Amplitude amplitude, float st
             return hi - lo;
         }();
         gain = reference_amplitude_factor(scale);
+        // Per pixel of the capture, not of the resampled patch: resampling keeps the slopes.
+        if (map.reference_mm_per_pixel > 0 && map.mm_per_pixel > 0)
+            gain *= map.reference_mm_per_pixel / map.mm_per_pixel;
     } else {
         gain = physical_gain(map);
     }
@@ -205,10 +232,13 @@ Image normal_map_from_height(const HeightMap& map, Amplitude amplitude, float st
 }
 
 float auto_strength(const HeightMap& map, Amplitude amplitude) {
+    // Known slopes are the material's, however gentle: a wood veneer's 0.75 degrees made 8
+    // would be 11 times steeper than its input (issue 28). `--bits auto` keeps them in 16 bits
+    // when 8 would not.
+    if (slopes_known(map, amplitude)) return 1.0f;
     const DetailSlopes detail = detail_slopes(normal_map_from_height(map, amplitude, 1.0f));
     Image mask = map.texture_mask.empty() ? texture_region(detail.tilt) : map.texture_mask;
     const double mean = material_statistics(detail, mask, 90.0).mean_tilt;
-    if (slopes_known(map, amplitude) && mean >= kAutoStrengthMinTilt) return 1.0f;
     // Mean of atan(g |s|) grows with g: bisect in log space for the target.
     std::vector<double> magnitude;
     for (std::size_t p = 0; p < detail.tilt.pixel_count(); ++p)
@@ -226,6 +256,10 @@ float auto_strength(const HeightMap& map, Amplitude amplitude) {
         (tilt_at(mid) < kAutoStrengthTilt ? lo : hi) = mid;
     }
     return float(std::sqrt(lo * hi));
+}
+
+Image compared_input_normals(const PatchSteps& steps, const HeightMap& patch, Amplitude amplitude, float strength) {
+    return slopes_known(patch, amplitude) ? steps.input_normals : scale_normal_slopes(steps.input_normals, strength);
 }
 
 void write_normal_map(const std::string& path, const Image& normals, float mm_per_pixel,

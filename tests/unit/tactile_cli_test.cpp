@@ -2,14 +2,18 @@
 #include <gtest/gtest.h>
 #include <fmt/format.h>
 #include <tdf/io/image_io.h>
+#include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/tactile_map.h>
 
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 
 #include "common/test_paths.h"
+#include "unit/tactile_unseen_inputs.h"
 
 using namespace tdf;
 
@@ -138,4 +142,35 @@ TEST(TactileCli, OptimizeIterationsFollowTheWindowSides) {
     EXPECT_EQ(run.status, 1) << run.output;
     EXPECT_EQ(run.output.rfind("tdf tactile: --optimize-iterations: 3 counts for 2 window sides", 0), 0u) << run.output;
     EXPECT_EQ(run.output.find('\n'), run.output.size() - 1) << "one line: " << run.output;
+}
+
+TEST(TactileCli, ReportComparesWithTheInputsOwnTiltAndWarnsOnce) {
+    // Issue 28: the report states the input's own tilt, the output's and their ratio; a ratio
+    // outside [0.75, 1.35] gets one warning line. A gentle normal map converted as it is keeps
+    // its tilt (no warning); made 4x steeper with --strength, the report says so.
+    TDF_REQUIRE_TDF_BINARY();
+    const std::string dir = test::scratch_dir() + "/cli_report";
+    std::filesystem::create_directories(dir);
+    const std::string input = dir + "/gentle.png";
+    write_png(input, encode_normals(test::gentle_veneer_normals(256)), 8, Quantize::Truncate);
+    const std::string convert = "tactile convert " + input + " -o " + dir + "/out.png --size 256 --steps-png " + dir;
+    auto count = [](const std::string& text, const std::string& what) {
+        std::size_t n = 0;
+        for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+        return n;
+    };
+    CliRun run = run_tdf(convert);
+    ASSERT_EQ(run.status, 0) << run.output;
+    EXPECT_EQ(count(run.output, "tilt ratio"), 1u) << run.output;
+    EXPECT_EQ(count(run.output, "of the input region's"), 0u) << run.output;
+    std::ifstream json(dir + "/8_statistics.json");
+    const std::string statistics((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+    for (const char* key : {"\"region_mean_tilt\"", "\"out_mean_tilt\"", "\"tilt_ratio\"", "\"strength\": 1,",
+                            "\"input_slopes_known\": true"})
+        EXPECT_NE(statistics.find(key), std::string::npos) << key << " in " << statistics;
+
+    run = run_tdf(convert + " --strength 4");
+    ASSERT_EQ(run.status, 0) << run.output;
+    EXPECT_EQ(count(run.output, "steeper than the input: detail tilt"), 1u) << run.output;
+    EXPECT_EQ(count(run.output, "of the input region's"), 1u) << "one warning line for the ratio: " << run.output;
 }

@@ -18,6 +18,7 @@
 
 #include "common/test_paths.h"
 #include "unit/tactile_test_util.h"
+#include "unit/tactile_unseen_inputs.h"
 
 using namespace tdf;
 using tdf::test::correlation;
@@ -47,6 +48,7 @@ struct Converted {
     Image cuts;
     SeamStatistics seams;
     float strength = 1;
+    std::vector<PatchSteps> steps;
 };
 Converted convert(const std::vector<std::string>& paths, int size, HeightInputOptions input_options = {}) {
     Converted c;
@@ -77,9 +79,10 @@ Converted convert(const std::vector<std::string>& paths, int size, HeightInputOp
     }
     c.seams = seam_statistics(c.result.height, c.cuts);
     const Image out = quantized_normals(normal_map_from_height(c.result, Amplitude::Auto, c.strength), 8);
-    for (std::size_t i = 0; i < paths.size(); ++i)
-        c.comparisons.push_back(
-            compare_material(scale_normal_slopes(steps[i].input_normals, c.strength), steps[i].region, out));
+    for (std::size_t i = 0; i < paths.size(); ++i)  // as convert reports: the input's own slopes
+        c.comparisons.push_back(compare_material(
+            compared_input_normals(steps[i], patches[i], Amplitude::Auto, c.strength), steps[i].region, out));
+    c.steps = steps;
     return c;
 }
 
@@ -229,7 +232,7 @@ TEST(MaterialRealSize, PatchPngPreviewReadsBackInMillimetres) {
     EXPECT_LT(worst, (*hi - *lo) / 65535.0 + 1e-5);
 }
 
-TEST(MaterialFlattening, LowReliefIsRescaledByStrengthAutoOrKeptWithSixteenBits) {
+TEST(MaterialFlattening, LowReliefKeepsItsSlopesWithSixteenBits) {
     // A veneer-like relief: mean detail tilt about 0.8 degrees.
     const Image n = sine_normals(160, 12, 0.0425);
     const std::string path = test::scratch_dir() + "/veneer.png";
@@ -239,12 +242,9 @@ TEST(MaterialFlattening, LowReliefIsRescaledByStrengthAutoOrKeptWithSixteenBits)
     const HeightMap patch = extract_patch(input, PatchOptions{}, &steps);
     const MaterialStatistics in = material_statistics(detail_slopes(steps.input_normals), Image(), 5.0);
     EXPECT_NEAR(in.mean_tilt, 0.8, 0.15);
-    // auto: scaled to 8 degrees (documented rule).
-    const float g = auto_strength(patch, Amplitude::Auto);
-    const Image scaled = normal_map_from_height(patch, Amplitude::Auto, g);
-    EXPECT_NEAR(material_statistics(detail_slopes(quantized_normals(scaled, 8)), Image(), 30.0).mean_tilt,
-                kAutoStrengthTilt,
-                0.1 * kAutoStrengthTilt);
+    // auto: a normal map's slopes are known, so they are kept however gentle (issue 28; the
+    // rule before scaled this one to 8 degrees).
+    EXPECT_EQ(auto_strength(patch, Amplitude::Auto), 1.0f);
     // strength 1 at 16 bits keeps the relief; 8 bits would not.
     const Image kept = normal_map_from_height(patch, Amplitude::Auto, 1.0f);
     const MaterialComparison sixteen = compare_material(steps.input_normals, Image(), quantized_normals(kept, 16));
@@ -253,6 +253,24 @@ TEST(MaterialFlattening, LowReliefIsRescaledByStrengthAutoOrKeptWithSixteenBits)
     RecordProperty("veneer_ratio_8", std::to_string(eight.tilt_ratio));
     EXPECT_NEAR(sixteen.tilt_ratio, 1.0, 0.15);
     EXPECT_GT(std::abs(eight.tilt_ratio - 1.0), 0.1);
+}
+
+TEST(MaterialFlattening, HeightImageOfUnknownSizeIsScaledByStrengthAuto) {
+    // The same relief as a grey height image without a size: its slopes have no scale, so
+    // auto gives its textured region kAutoStrengthTilt degrees.
+    Image height(160, 160, 1);
+    for (int y = 0; y < 160; ++y)
+        for (int x = 0; x < 160; ++x) height.at(x, y, 0) = float(0.5 + 0.5 * std::sin(2 * kPi * x / 12.0));
+    const std::string path = test::scratch_dir() + "/unknown_size_height.png";
+    write_png(path, height, 16, Quantize::Round);
+    const HeightMap patch = extract_patch(load_height_input(path), PatchOptions{});
+    ASSERT_FALSE(slopes_known(patch, Amplitude::Auto));
+    const float g = auto_strength(patch, Amplitude::Auto);
+    EXPECT_NE(g, 1.0f);
+    const Image scaled = normal_map_from_height(patch, Amplitude::Auto, g);
+    EXPECT_NEAR(material_statistics(detail_slopes(quantized_normals(scaled, 8)), Image(), 30.0).mean_tilt,
+                kAutoStrengthTilt,
+                0.1 * kAutoStrengthTilt);
 }
 
 TEST(MaterialSeams, TheMeasureSeesAStepACutAndARepeatedBorder) {
@@ -427,4 +445,84 @@ TEST(MaterialEndToEnd, EverySharedSampleKeepsItsMaterial) {
         EXPECT_LT(c.seams.wrap_ratio_rows, kSeamLimit) << name << " " << c.seams.json();
         EXPECT_FALSE(c.seams.duplicated_border) << name;
     }
+}
+
+// Issue 28: inputs unlike the shared samples. A gentle, mostly flat normal map must stay gentle
+// (its slopes are known: only re-tiled), and a knit capture's fine loops must survive step 1.
+// The bars are the issue's aim: tilt ratio in [0.75, 1.35], at most 5 points more flat texels.
+namespace {
+const MaterialLimits kIssue28Aim{0.75, 1.35, 0.05, 1.0};  // the aim says nothing of the distance
+}  // namespace
+
+TEST(MaterialUnseenInputs, GentleNormalMapStaysGentle) {
+    const std::string path = test::scratch_dir() + "/gentle_veneer_normal.png";
+    write_png(path, encode_normals(test::gentle_veneer_normals()), 8, Quantize::Truncate);
+    const Converted c = convert({path}, 512);
+    const MaterialComparison& m = c.comparisons[0];
+    RecordProperty("gentle_veneer", m.json());
+    // The input is of the issue's kind: gentle and mostly flat (as the file gives it back).
+    EXPECT_LT(m.region.mean_tilt, 1.0) << m.json();
+    EXPECT_GT(m.region.flat_fraction, 0.6) << m.json();
+    EXPECT_EQ(c.strength, 1.0f) << "a normal map's slopes are known: --strength auto keeps them";
+    for (const std::string& problem : check_material(m, kIssue28Aim)) ADD_FAILURE() << problem << " " << m.json();
+    // What the measurement script compares: the file itself (rgb / 127.5 - 1) against the output.
+    Image file = read_image(path);
+    for (float& v : file.values()) v = v * 2.0f - 1.0f;
+    const Image out = quantized_normals(normal_map_from_height(c.result, Amplitude::Auto, c.strength), 8);
+    const MaterialComparison direct = compare_material(file, Image(), out);
+    EXPECT_NEAR(direct.tilt_ratio, m.tilt_ratio, 1e-3);
+}
+
+TEST(MaterialUnseenInputs, KnitCaptureKeepsItsRelief) {
+    for (const float period : {8.0f, 10.0f, 12.0f}) {  // the issue's loops: 8-12 px apart
+        const std::string path = test::scratch_dir() + fmt::format("/knit_capture_{}.npy", period);
+        test::write_npy_f8(path, test::knit_capture_heights(period));
+        const Converted c = convert({path}, 320);
+        const MaterialComparison& m = c.comparisons[0];
+        RecordProperty(fmt::format("knit_capture_{}", period), m.json());
+        EXPECT_NEAR(m.region.fraction, 0.35, 0.05) << "the contact region is about a third of the frame";
+        for (const std::string& problem : check_material(m, kIssue28Aim))
+            ADD_FAILURE() << "period " << period << ": " << problem << " " << m.json();
+    }
+}
+
+TEST(MaterialUnseenInputs, SmoothingWindowNarrowsForFineLoopsOnly) {
+    const std::string path = test::scratch_dir() + "/knit_capture_window.npy";
+    test::write_npy_f8(path, test::knit_capture_heights());
+    PatchSteps knit;
+    extract_patch(load_height_input(path), PatchOptions{}, &knit);
+    EXPECT_LT(knit.bilateral_diameter, PatchOptions{}.bilateral_diameter);
+    EXPECT_GT(knit.full_window_tilt_loss, kSmoothingMaxTiltLoss);
+    // Given explicitly, the reference's window is used as it is.
+    PatchOptions on;
+    on.smooth = Toggle::On;
+    PatchSteps forced;
+    extract_patch(load_height_input(path), on, &forced);
+    EXPECT_EQ(forced.bilateral_diameter, on.bilateral_diameter);
+    TDF_REQUIRE_SHARED_DATA(kStrawberry);
+    PatchSteps strawberry;
+    extract_patch(load_height_input(test::shared_data_dir() + "/" + kStrawberry), PatchOptions{}, &strawberry);
+    EXPECT_EQ(strawberry.bilateral_diameter, PatchOptions{}.bilateral_diameter) << "the reference's window, kept";
+}
+
+TEST(MaterialUnseenInputs, ResamplingACaptureKeepsItsSlopes) {
+    const std::string path = test::scratch_dir() + "/knit_capture_resampled.npy";
+    test::write_npy_f8(path, test::knit_capture_heights());
+    const HeightInput input = load_height_input(path);
+    PatchOptions keep, resample;
+    keep.size = 0, resample.size = 256;
+    const HeightMap kept = extract_patch(input, keep), resampled = extract_patch(input, resample);
+    ASSERT_GT(resampled.height.width(), kept.height.width() * 3 / 2);  // stretched by more than 1.5
+    const double kept_tilt = material_statistics(detail_slopes(normal_map_from_height(kept)), kept.texture_mask, 90.0).mean_tilt;
+    const double resampled_tilt =
+        material_statistics(detail_slopes(normal_map_from_height(resampled)), resampled.texture_mask, 90.0).mean_tilt;
+    RecordProperty("kept_tilt", std::to_string(kept_tilt));
+    RecordProperty("resampled_tilt", std::to_string(resampled_tilt));
+    EXPECT_NEAR(resampled_tilt / kept_tilt, 1.0, 0.1);
+    // The pixel the amplitude counts per travels with the patch file.
+    const std::string exr = test::scratch_dir() + "/knit_patch.exr";
+    write_height_map(exr, resampled);
+    const HeightMap back = read_height_map(exr);
+    EXPECT_FLOAT_EQ(back.reference_mm_per_pixel, kGelSightMiniMmPerPixel);
+    EXPECT_EQ(normal_map_from_height(back).values(), normal_map_from_height(resampled).values());
 }

@@ -15,6 +15,8 @@ constexpr float kGelSightMiniMmPerPixel = 0.085f;
 /// Metadata keys written with tactile images (PNG tEXt chunks / EXR string attributes).
 constexpr const char* kMetaMmPerPixel = "tdf:mm_per_pixel";            ///< lateral pixel size, mm
 constexpr const char* kMetaReferenceScale = "tdf:reference_scale_mm";  ///< spec 6.2 step 6 `scale`
+/// HeightMap::reference_mm_per_pixel: the capture's pixel size, which the reference amplitude counts per.
+constexpr const char* kMetaReferencePixel = "tdf:reference_mm_per_pixel";
 constexpr const char* kMetaSource = "tdf:source";                      ///< input file of the pipeline
 /// Height range of a 16-bit PNG preview of a height map (mm): reading it back restores mm.
 constexpr const char* kMetaHeightMin = "tdf:height_min_mm";
@@ -33,6 +35,11 @@ struct HeightMap {
     /// step 6); 0 when the map did not come from a step-1 patch. Selects the reference's
     /// normal amplitude (spec 6.4 step 3).
     float reference_scale_mm = 0;
+    /// The pixel size (mm) of the capture that reference_scale_mm was measured on. The
+    /// reference amplitude counts slopes per pixel of that capture, so that resampling the
+    /// patch keeps them (a 158 px contact crop stretched to 256 px lost 38 % of its slopes,
+    /// issue 28); 0 = per pixel of this map.
+    float reference_mm_per_pixel = 0;
     std::string source;  ///< the file it came from, for messages
     /// Heights are in pixel widths, not mm: an integrated normal map whose pixel size is
     /// unknown. Its slopes are still true (physical amplitude uses a gain of 1).

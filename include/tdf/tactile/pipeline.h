@@ -32,7 +32,10 @@ struct PatchOptions {
     HighPass high_pass = HighPass::Auto;
     int freq_threshold = 5;        ///< FFT block half-size in frequency bins
     float cutoff_mm = 2.0f;        ///< Gaussian cut-off wavelength
-    Toggle smooth = Toggle::Auto;  ///< bilateral filter after the high-pass; Auto: off for normal maps
+    /// Bilateral filter after the high-pass. Auto: off for every input but captures; captures get
+    /// the widest window (bilateral_diameter, then 2 px less, ...) that takes at most
+    /// kSmoothingMaxTiltLoss of the contact region's detail tilt, or none.
+    Toggle smooth = Toggle::Auto;
     int bilateral_diameter = 5;
     float sigma_color = 125.0f;     ///< mm, like the reference's value on heights in mm
     float sigma_space = 125.0f;     ///< pixels
@@ -43,9 +46,20 @@ struct PatchOptions {
     int size = -1;
 };
 
+/// Smoothing of a capture may take this share of its contact region's mean detail tilt
+/// (material_statistics), the material limits' tolerance. The reference's 5 px window (nearly a
+/// box filter with its sigmas) takes 12 % of the strawberry's, but 30 % of the tilt of knit
+/// loops 10 px apart: there it removes the texture, not the sensor's noise (issue 28).
+constexpr double kSmoothingMaxTiltLoss = 0.15;
+
 /// Intermediate images of step 1 for the step figures (empty when a step is skipped).
 struct PatchSteps {
     Image raw, contact_mask, high_passed, smoothed, patch;
+    /// The bilateral window used (0 = no smoothing), and the share of the detail tilt the
+    /// reference's window (PatchOptions::bilateral_diameter) would have taken when auto
+    /// smoothing chose a narrower one (else 0).
+    int bilateral_diameter = 0;
+    double full_window_tilt_loss = 0;
     /// The input's textured region (1 channel, the input's size): the contact mask of a
     /// capture, else texture_region of the input's detail tilt.
     Image region;
@@ -57,7 +71,8 @@ struct PatchSteps {
 /// inputs keep their whole extent), resampling. The result is in mm (or pixel widths, see
 /// HeightMap::pixel_heights) with minimum 0; mm_per_pixel follows the resampling;
 /// texture_mask is the region inside the patch. reference_scale_mm is the crop's height range
-/// (spec 6.2 step 6) for captures (.npz/.npy), else 0 (physical amplitude). Throws tdf::Error
+/// (spec 6.2 step 6) for captures (.npz/.npy), else 0 (physical amplitude); captures also get
+/// reference_mm_per_pixel, the capture's pixel size. Throws tdf::Error
 /// (naming the input) for an empty contact mask or a flat patch (range <= 1e-6 mm).
 HeightMap extract_patch(const HeightInput& input, const PatchOptions& options, PatchSteps* steps = nullptr);
 
@@ -76,7 +91,11 @@ HeightMap optimize_height_maps(const std::vector<HeightMap>& patches, const Heig
 
 enum class Amplitude {
     Auto,       ///< Reference when the map has a reference_scale_mm, else Physical
-    Reference,  ///< spec 6.4 step 3: slopes = height_mm * k(scale) per pixel
+    /// spec 6.4 step 3: slopes = height_mm * k(scale) per pixel of the capture
+    /// (HeightMap::reference_mm_per_pixel; per pixel of the map when that is 0). The reference
+    /// counts per pixel of its resampled 256 px patch, which lost slopes wherever the contact
+    /// crop was smaller (issue 28).
+    Reference,
     Physical,   ///< slopes = height_mm / mm_per_pixel: the true surface at its real size
 };
 
@@ -91,13 +110,19 @@ Image normal_map_from_height(const HeightMap& map, Amplitude amplitude = Amplitu
 /// pixel widths, or a known pixel size.
 bool slopes_known(const HeightMap& map, Amplitude amplitude);
 
-/// `--strength auto`: 1 when the slopes are known and the mean detail tilt (material_statistics)
-/// of the map's textured region is at least kAutoStrengthMinTilt degrees; otherwise the factor
-/// that makes it kAutoStrengthTilt degrees (a height image of unknown size, a veneer's 0.8
-/// degree relief, which an 8-bit map would flatten).
-constexpr double kAutoStrengthMinTilt = 2.0;
+/// `--strength auto`: 1 when the slopes are known (slopes_known), however gentle they are: a
+/// normal map keeps its slopes. Otherwise (a height image of unknown size, whose slopes have no
+/// scale) the factor that makes the mean detail tilt (material_statistics) of the map's
+/// textured region kAutoStrengthTilt degrees.
 constexpr double kAutoStrengthTilt = 8.0;
 float auto_strength(const HeightMap& map, Amplitude amplitude);
+
+/// The input normals that the statistics of a map converted from `patch` at `strength` compare
+/// with (`tdf tactile convert`'s report): the input's own (steps.input_normals) when the slopes
+/// of `patch` are known, so that the tilt ratio is the output's over the input's own whatever
+/// the strength; else (slopes of unknown scale, which have no amplitude of their own) the
+/// input at the output's strength.
+Image compared_input_normals(const PatchSteps& steps, const HeightMap& patch, Amplitude amplitude, float strength);
 
 /// Writes decoded normals as a PNG (8 or 16 bits, reference encoding, spec 6.4 step 5) or,
 /// for an .exr path, as float decoded normals; `mm_per_pixel` (when > 0) and `source` are
