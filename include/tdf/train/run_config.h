@@ -104,7 +104,7 @@ struct RunConfig {
     /// is what relief-aligned colour mostly is.
     int albedo_range_radius = 1;
     float albedo_range_lighten = 0.04f;
-    float albedo_range_darken = 0.15f;
+    float albedo_range_darken = 0.08f;
     LossWeights weights;
     TactileGuidanceLoss tactile_guidance_loss = TactileGuidanceLoss::Cosine;  ///< paper; Mse = code
     int checkpoint_every = 50;      ///< iterations between checkpoints (0 = only at phase ends)
