@@ -90,7 +90,9 @@ void reset_tries(const BatchFolder& folder, const std::vector<std::size_t>& todo
 int run_batch(const BatchOptions& o) {
     if (o.engine != "local" && o.engine != "slurm")
         throw_error("--engine must be local or slurm, not '{}'", o.engine);
+    // Every problem a row can have is found here, before anything is written or launched.
     const std::vector<BatchJob> jobs = read_manifest(o.manifest);
+    check_job_inputs(jobs, fs::current_path().string());
     if (o.output.empty()) throw_error("-o/--output is empty: give the batch folder");
     // One `tdf batch run` per folder at a time (array tasks do not take this lock).
     const OutputFolderLock lock(o.output, "batch run");
