@@ -313,6 +313,7 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
             const pid_t pid =
                 spawn_process(argv, folder.working_folder(), stdout_path, log, job.command != "compare");
             running[pid] = RunningJob{index, state, ec ? 0 : offset, Clock::now()};
+            ++outcome.started;
             log_info("started {} ({} of {}): {}",
                      job.name,
                      outcome.done + outcome.failed + outcome.interrupted + int(running.size()),

@@ -31,6 +31,7 @@ struct JobRunPlan {
 constexpr double kTimeoutGraceSeconds = 10;
 
 struct JobRunOutcome {
+    int started = 0;      ///< attempts started (retries included)
     int done = 0;
     int failed = 0;       ///< jobs that failed for good (input, or resource with no retry left)
     int interrupted = 0;  ///< preempted: stopped by a signal, continued by the next run
