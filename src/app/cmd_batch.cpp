@@ -123,7 +123,9 @@ int run_batch(const BatchOptions& o) {
                  todo.size());
 
     if (o.engine == "slurm") {
-        const SlurmSubmission s = submit_slurm(folder, todo, o.slurm);
+        SlurmOptions slurm = o.slurm;
+        slurm.max_retries = o.max_retries;
+        const SlurmSubmission s = submit_slurm(folder, todo, slurm);
         if (!o.slurm.wait) {
             log_info("follow it with `tdf batch status {}` (squeue -j {})", folder.root(), s.array_job);
             return 0;
@@ -178,6 +180,20 @@ int run_status(const BatchOptions& o) {
         std::printf("%s\n", batch_summary_json(folder).dump(2).c_str());
     else
         std::fputs(batch_status_table(folder).c_str(), stdout);
+    return batch_totals(folder).exit_code();
+}
+
+// What the Slurm finish job runs once every array task has ended.
+int run_finish(const BatchOptions& o) {
+    const BatchFolder folder = BatchFolder::open(o.folder);
+    const int resubmitted = submit_retry_round(folder);
+    write_batch_summary(folder);
+    std::fputs(batch_status_table(folder).c_str(), stdout);
+    if (resubmitted > 0) {
+        log_info("{} job(s) resubmitted for a resource failure; the summary follows their round",
+                 resubmitted);
+        return 0;
+    }
     return batch_totals(folder).exit_code();
 }
 
@@ -266,6 +282,21 @@ Command register_batch(CLI::App& root) {
            "--max-parallel", o->slurm.max_parallel, "slurm: array tasks at a time, %K (0 = no limit)")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
+    run->add_option("--max-array-size",
+                    o->slurm.max_array_size,
+                    "slurm: split into arrays of task ids below this (0 = the cluster's MaxArraySize)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    run->add_option("--retry-mem-factor",
+                    o->slurm.retry_mem_factor,
+                    "slurm: a retry's --mem (from --sbatch-option=--mem=...) times this per failed try")
+        ->check(CLI::Range(1.0, 100.0))
+        ->capture_default_str();
+    run->add_option("--retry-time-factor",
+                    o->slurm.retry_time_factor,
+                    "slurm: a retry's --time (from --sbatch-option=--time=...) times this per failed try")
+        ->check(CLI::Range(1.0, 100.0))
+        ->capture_default_str();
     run->add_option(
            "--cpus-per-task", o->slurm.cpus_per_task, "slurm: --cpus-per-task (tdf threads follow it)")
         ->check(CLI::PositiveNumber)
@@ -287,17 +318,24 @@ Command register_batch(CLI::App& root) {
     status->add_flag("--summary", o->summary, "also (re)write summary.json and summary.csv");
     status->add_flag("--json", o->json, "print the summary JSON instead of the table");
 
+    CLI::App* finish = app->add_subcommand(
+        "finish",
+        "after a Slurm submission (its finish job): resubmit resource failures with tries left, "
+        "write the summary");
+    finish->add_option("folder", o->folder, "batch folder")->required();
+
     CLI::App* task =
         app->add_subcommand("task", "run one job of a batch folder (what each Slurm array task runs)");
     task->add_option("folder", o->folder, "batch folder")->required();
     task->add_option("index", o->task_index, "job index (0-based, the manifest's order)")->required();
 
-    for (CLI::App* sub : {grid, run, status, task}) sub->fallthrough();  // global flags may follow
+    for (CLI::App* sub : {grid, run, status, finish, task}) sub->fallthrough();  // global flags may follow
     command.app = app;
-    command.run = [o, grid, run, status, task]() -> int {
+    command.run = [o, grid, run, status, finish, task]() -> int {
         if (grid->parsed()) return run_grid(*o);
         if (run->parsed()) return run_batch(*o);
         if (status->parsed()) return run_status(*o);
+        if (finish->parsed()) return run_finish(*o);
         if (task->parsed()) return run_task(*o);
         return 1;
     };

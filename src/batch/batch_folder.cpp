@@ -81,6 +81,7 @@ Json JobState::to_json() const {
             {"started", started},
             {"finished", finished},
             {"host", host},
+            {"failed_hosts", failed_hosts},
             {"pid", pid},
             {"slurm_job", slurm_job},
             {"command_line", command_line},
@@ -102,6 +103,7 @@ JobState JobState::from_json(const Json& json) {
     s.started = json.value("started", std::string());
     s.finished = json.value("finished", std::string());
     s.host = json.value("host", std::string());
+    s.failed_hosts = json.value("failed_hosts", std::vector<std::string>());
     s.pid = json.value("pid", 0);
     s.slurm_job = json.value("slurm_job", std::string());
     s.command_line = json.value("command_line", std::string());
@@ -252,6 +254,7 @@ JobState BatchFolder::read_state(const BatchJob& job) const {
         state.status = JobStatus::Failed;
         state.end = JobEnd::FailedResource;
         state.tries += 1;  // the attempt ended, unrecorded
+        state.failed_hosts.push_back(state.host);
         state.error = "the runner stopped without recording a result (killed?)";
     }
     return state;

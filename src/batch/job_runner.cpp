@@ -153,6 +153,8 @@ void collect_job_result(const BatchFolder& folder, const BatchJob& job, int exit
         }
     }
     if (state.end != JobEnd::Preempted) state.tries += 1;
+    // Under Slurm, a node where a job failed twice for a resource is excluded on its retry.
+    if (state.end == JobEnd::FailedResource) state.failed_hosts.push_back(state.host);
     // Quality numbers, whatever the status (a failed compare still measured its images).
     try {
         if (job.command == "optimize" && !records.empty()) {
@@ -324,6 +326,7 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
             state.status = JobStatus::Failed;
             state.end = JobEnd::FailedResource;
             state.tries += 1;
+            state.failed_hosts.push_back(state.host);
             state.error = e.what();
             state.finished = utc_timestamp();
             folder.write_state(job, state);

@@ -51,8 +51,11 @@ if [ "$engine" = slurm ]; then
   [ $rc = 0 ] || fail "could not start the test Slurm"
   trap 'bash "$src/tests/batch/slurm_cluster.sh" stop "$daemons"' EXIT
   eval "$env_line"
-  "$tdf" batch run manifest.csv -o b --engine slurm --cpus-per-task 1 --max-parallel 2 --signal-seconds 60 \
-    --wait > run1.out 2> run1.err &
+  # --max-array-size 3: two arrays (jobs 0-2, then 3-4 as task ids 0-1). render_views kills itself
+  # on its first attempt (test-only TDF_TEST_KILL_JOBS, passed to the tasks by sbatch): failed-resource,
+  # so the finish job submits a retry round, which --wait follows.
+  TDF_TEST_KILL_JOBS=render_views "$tdf" batch run manifest.csv -o b --engine slurm --cpus-per-task 1 \
+    --max-parallel 2 --signal-seconds 60 --max-array-size 3 --wait > run1.out 2> run1.err &
 else
   # One job at a time: opt_small, then opt_long, which the SIGTERM below stops; the rest never start.
   "$tdf" --threads 2 batch run manifest.csv -o b --jobs 1 > run1.out 2> run1.err &
@@ -77,6 +80,12 @@ if [ "$engine" = slurm ]; then
   ls b/logs/slurm-*_1.out > /dev/null || fail "no per-task Slurm log"
   ls b/logs/slurm-summary-*.out > /dev/null || fail "the summary job did not run"
   grep -q "requeued Slurm task" b/logs/slurm-*_1.out || fail "the interrupted task was not requeued"
+  test -s b/slurm/array_3.sh || fail "5 jobs with --max-array-size 3 were not split into two arrays"
+  grep -q '"$((3 + SLURM_ARRAY_TASK_ID))"' b/slurm/array_3.sh || fail "the second array does not offset its task ids"
+  [ "$(grep -c '' b/slurm/submissions.jsonl)" = 2 ] || fail "expected the first submission and one retry round"
+  [ "$(state b/state/render_views.json attempts)" = 2 ] || fail "render_views should have been retried once"
+  [ "$(state b/state/render_views.json class)" = done ] || fail "render_views is not done after its retry"
+  [ "$(state b/state/broken.json attempts)" = 1 ] || fail "the bad input was retried"
 else
   kill -TERM $runner   # the batch passes SIGTERM to its running jobs and starts no new one
   set +e; wait $runner; rc=$?; set -e

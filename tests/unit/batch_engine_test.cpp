@@ -346,3 +346,49 @@ TEST(BatchEngine, SlurmArraySpecAndScript) {
           "exec '/opt/tdf/bin/tdf' batch task '" + root + "' \"$SLURM_ARRAY_TASK_ID\"\n"})
         EXPECT_NE(script.find(line), std::string::npos) << line << "\n" << script;
 }
+
+TEST(BatchEngine, ArraysAreSplitBelowMaxArraySize) {
+    const auto arrays = split_array({0, 1, 2, 999, 1000, 1001, 2500}, 1000);
+    ASSERT_EQ(arrays.size(), 3u);
+    EXPECT_EQ(arrays[0].first, 0u);
+    EXPECT_EQ(arrays[0].second, (std::vector<std::size_t>{0, 1, 2, 999}));
+    EXPECT_EQ(arrays[1].first, 1000u);
+    EXPECT_EQ(arrays[1].second, (std::vector<std::size_t>{0, 1}));
+    EXPECT_EQ(arrays[2].first, 2000u);
+    EXPECT_EQ(arrays[2].second, (std::vector<std::size_t>{500}));
+    EXPECT_EQ(split_array({3, 4}, 1001).size(), 1u);
+
+    const std::string root = fresh("slurm_split");
+    const auto jobs = parse_manifest("name,command,args\na,render,s.json\n", "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, "/opt/tdf", "/home/me");
+    const std::string script = slurm_array_script(folder, {0, 1}, SlurmOptions(), 1000);
+    EXPECT_NE(script.find("batch task '" + root + "' \"$((1000 + SLURM_ARRAY_TASK_ID))\"\n"), std::string::npos)
+        << script;
+}
+
+TEST(BatchEngine, RetryRoundsScaleMemoryAndTime) {
+    EXPECT_EQ(scale_sbatch_option("--mem=4G", 1.5), "--mem=6144");
+    EXPECT_EQ(scale_sbatch_option("--mem=1000", 2), "--mem=2000");
+    EXPECT_EQ(scale_sbatch_option("--mem=512M", 1), "--mem=512");
+    EXPECT_EQ(scale_sbatch_option("--time=30", 2), "--time=60");
+    EXPECT_EQ(scale_sbatch_option("--time=01:30:00", 2), "--time=180");
+    EXPECT_EQ(scale_sbatch_option("--time=1-00:00:00", 1.5), "--time=2160");
+    EXPECT_EQ(scale_sbatch_option("--time=10:30", 1), "--time=11");  // MM:SS, rounded up
+    EXPECT_EQ(scale_sbatch_option("--partition=cpu", 2), "--partition=cpu");
+    SlurmOptions o;
+    o.retry_mem_factor = 1.5;
+    o.max_array_size = 7;
+    EXPECT_EQ(SlurmOptions::from_json(o.to_json()).retry_mem_factor, 1.5);
+    EXPECT_EQ(SlurmOptions::from_json(o.to_json()).max_array_size, 7);
+}
+
+TEST(BatchEngine, ResourceFailuresRecordTheirHost) {
+    const std::string root = fresh("failed_hosts");
+    const auto jobs = parse_manifest("name,command,args\nk,tactile,kill 99 {out}\n", "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, fake_tdf(root), root);
+    JobRunPlan plan;
+    plan.indices = {0};
+    plan.max_retries = 1;
+    run_jobs(folder, plan);
+    EXPECT_EQ(folder.read_state(jobs[0]).failed_hosts, (std::vector<std::string>{host_name(), host_name()}));
+}

@@ -51,6 +51,7 @@ struct JobState {
     double seconds_total = 0;       ///< wall time of all attempts
     std::string started, finished;  ///< UTC ISO 8601
     std::string host;
+    std::vector<std::string> failed_hosts;  ///< the host of each failed-resource try
     int pid = 0;               ///< the runner's pid while running
     std::string slurm_job;     ///< "<array job>_<task>" under Slurm
     std::string command_line;  ///< the tdf command of the last attempt
