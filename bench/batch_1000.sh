@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # `tdf batch run` at scale (docs/commands/batch.md "Measured"; a benchmark, not a test):
-#   bench/batch_1000.sh [N]   N tiny optimize jobs (default 1000) on this machine, 5 % of them bad
-#                             inputs (a mesh that does not parse) and 2 % killing themselves on
-#                             their first attempt (the test-only TDF_TEST_KILL_JOBS)
+#   bench/batch_1000.sh [local] [N]   N tiny optimize jobs (default 1000) on this machine, 5 % of
+#                                     them bad inputs (a mesh that does not parse) and 2 % killing
+#                                     themselves on their first attempt (test-only TDF_TEST_KILL_JOBS)
+#   bench/batch_1000.sh slurm [N]     the same with N = 200 by default as Slurm array tasks on a
+#                                     throw-away single-node Slurm (tests/batch/slurm_cluster.sh);
+#                                     the killed ones come back in a retry round
 # Baseline, measured in the same run: the same N command lines run directly by `xargs -P J`
 # (no kills, no state, no retries). Printed: wall and CPU of both, jobs per minute, the
 # scheduler's overhead per job (wall and CPU, ms), files and bytes per job, and the checks
@@ -12,9 +15,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 src=$(pwd)
 tdf=$src/${TDF_BUILD_DIR:-build}/tdf
-n=${1:-1000}
+engine=local
+case "${1:-}" in local|slurm) engine=$1; shift;; esac
+n=${1:-$([ $engine = slurm ] && echo 200 || echo 1000)}
 parallel=${JOBS:-$(nproc)}
-work=$src/${TDF_BUILD_DIR:-build}/bench-results/batch_1000
+work=$src/${TDF_BUILD_DIR:-build}/bench-results/batch_1000_$engine
 rm -rf "$work"
 mkdir -p "$work"
 cd "$work"
@@ -56,12 +61,23 @@ measure() {
 }
 echo "$n jobs ($bad bad inputs, $killed killed once), $parallel at a time, 1 thread each; $(date -u +%FT%TZ)"
 read -r base_wall base_cpu < <(measure baseline xargs -P "$parallel" -I{} sh -c '{} 2>/dev/null' < baseline.txt)
-read -r bat_wall bat_cpu < <(TDF_TEST_KILL_JOBS=$kills measure batch \
-  "$tdf" batch run manifest.csv -o b --jobs "$parallel" --threads-per-job 1)
+if [ $engine = slurm ]; then
+  env_line=$(bash "$src/tests/batch/slurm_cluster.sh" start "$work/slurm-daemons")
+  trap 'bash "$src/tests/batch/slurm_cluster.sh" stop "$work/slurm-daemons"' EXIT
+  eval "$env_line"
+  # CPU here is only what ran under this shell (submission, waiting): the tasks run under slurmd.
+  read -r bat_wall bat_cpu < <(TDF_TEST_KILL_JOBS=$kills measure batch \
+    "$tdf" batch run manifest.csv -o b --engine slurm --max-parallel "$parallel" --cpus-per-task 1 --wait)
+  bat_cpu=nan
+else
+  read -r bat_wall bat_cpu < <(TDF_TEST_KILL_JOBS=$kills measure batch \
+    "$tdf" batch run manifest.csv -o b --jobs "$parallel" --threads-per-job 1)
+fi
 
-python3 - "$n" "$bad" "$kills" "$base_wall" "$base_cpu" "$bat_wall" "$bat_cpu" "$parallel" <<'EOF'
+python3 - "$n" "$bad" "$kills" "$base_wall" "$base_cpu" "$bat_wall" "$bat_cpu" "$parallel" "$engine" <<'EOF'
 import json, os, sys
 n, bad, kills = int(sys.argv[1]), int(sys.argv[2]), set(sys.argv[3].split(","))
+slurm = sys.argv[9] == "slurm"
 base_wall, base_cpu, bat_wall, bat_cpu = map(float, sys.argv[4:8])
 parallel = int(sys.argv[8])
 s = json.load(open("b/summary.json"))
@@ -83,7 +99,7 @@ t = s["totals"]
 if (t["done"], t["failed_input"], t["failed_resource"]) != (n - bad, bad, 0):
     problems.append(f"totals {t}")
 # Files the batch writes per job beside the job's own outputs: state/<name>.json and logs/<name>.log.
-meta_files = sum(len(os.listdir(os.path.join("b", d))) for d in ("state", "logs"))
+meta_files = sum(len(os.listdir(os.path.join("b", d))) for d in ("state", "logs"))  # slurm: + slurm-*.out
 meta_bytes = sum(os.path.getsize(os.path.join("b", d, f)) for d in ("state", "logs") for f in os.listdir(os.path.join("b", d)))
 out_files = out_bytes = 0
 for root, _, files in os.walk("b/jobs"):
@@ -91,9 +107,12 @@ for root, _, files in os.walk("b/jobs"):
     out_bytes += sum(os.path.getsize(os.path.join(root, f)) for f in files)
 summary_bytes = sum(os.path.getsize(os.path.join("b", f)) for f in ("summary.json", "summary.csv", "index.html"))
 print(f"baseline (xargs -P {parallel}): {base_wall:.1f} s wall, {base_cpu:.1f} s CPU, {60 * n / base_wall:.0f} jobs/min")
-print(f"tdf batch run:            {bat_wall:.1f} s wall, {bat_cpu:.1f} s CPU, {60 * n / bat_wall:.0f} jobs/min"
-      f" ({starts} starts for {n} jobs)")
+print(f"tdf batch run ({'slurm' if slurm else 'local'}): {bat_wall:.1f} s wall, {bat_cpu:.1f} s CPU,"
+      f" {60 * n / bat_wall:.0f} jobs/min ({starts} starts for {n} jobs)")
 own = [l for l in open("batch.err") if l.startswith("tdf batch's own CPU time")]
+if slurm:
+    rounds = sum(1 for _ in open("b/slurm/submissions.jsonl"))
+    own = [f"{rounds} submissions (the first and its retry rounds); per task {1000 * (bat_wall - base_wall) * parallel / n:.0f} ms of a slot's wall time over the baseline"]
 print(f"scheduler overhead per job vs the baseline: {1000 * (bat_wall - base_wall) * parallel / n:.1f} ms of a"
       f" slot's wall time, {1000 * (bat_cpu - base_cpu) / n:.1f} ms CPU (machine shared: noisy)")
 print("scheduler's own (getrusage of tdf batch): " + (own[0].strip() if own else "not reported"))

@@ -64,7 +64,8 @@ runner=$!
 
 # Stop opt_long once it has written its first checkpoint (iteration 5 of 200).
 wait_for 300 "opt_long's first checkpoint" test -s b/jobs/opt_long/checkpoint.bin
-wait_for 30 "opt_long running" test "$(state b/state/opt_long.json status)" = running
+opt_long_running() { [ "$(state b/state/opt_long.json status)" = running ]; }
+wait_for 30 "opt_long running" opt_long_running
 if [ "$engine" = slurm ]; then
   task=$(state b/state/opt_long.json slurm_job)
   [ -n "$task" ] || fail "no Slurm task id in opt_long's state"
@@ -73,7 +74,9 @@ if [ "$engine" = slurm ]; then
   # itself: bound it; the requeue below is what counts.
   timeout 10 scancel --batch --signal=TERM "$task" 2>/dev/null || true
   # The runner requeues the task; Slurm holds a requeued job ~2 minutes (BeginTime): release it now.
-  wait_for 120 "opt_long requeued" test "$(squeue -h -j "$task" -o %T 2>/dev/null)" = PENDING
+  # (A function, so that squeue is asked again on every poll, not once when wait_for is called.)
+  requeued() { [ "$(squeue -h -j "$task" -o %T 2>/dev/null)" = PENDING ]; }
+  wait_for 120 "opt_long requeued" requeued
   scontrol update JobId="$task" StartTime=now
   set +e; wait $runner; rc=$?; set -e
   [ $rc = 2 ] || { cat run1.err; fail "tdf batch run --engine slurm --wait: exit $rc, expected 2 (one job failed)"; }
