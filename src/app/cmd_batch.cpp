@@ -92,6 +92,10 @@ void reset_tries(const BatchFolder& folder, const std::vector<std::size_t>& todo
 int run_batch(const BatchOptions& o) {
     if (o.engine != "local" && o.engine != "slurm")
         throw_error("--engine must be local or slurm, not '{}'", o.engine);
+    // Each Slurm task runs one job: there is no runner to cap or time jobs across the array.
+    if (o.engine == "slurm" && (o.timeout > 0 || o.max_failures > 0))
+        throw_error("--timeout and --max-failures apply to --engine local; under Slurm give "
+                    "--sbatch-option=--time=... (Slurm enforces it; --signal-seconds warns the task)");
     // Every problem a row can have is found here, before anything is written or launched.
     const std::vector<BatchJob> jobs = read_manifest(o.manifest);
     check_job_inputs(jobs, fs::current_path().string());

@@ -108,8 +108,8 @@ void kill_self_if_test_victim() {
     for (std::size_t at = 0; (at = list.find("," + name, at)) != std::string::npos; ++at) {
         const std::size_t end = at + 1 + name.size();
         if (list[end] != ',' && list[end] != ':') continue;
-        const int tries = list[end] == ':' ? std::atoi(list.c_str() + end + 1) : 1;
-        if (std::atoi(attempt) <= tries) std::raise(SIGKILL);
+        const int last_attempt = list[end] == ':' ? std::atoi(list.c_str() + end + 1) : 1;
+        if (std::atoi(attempt) <= last_attempt) std::raise(SIGKILL);
     }
 }
 

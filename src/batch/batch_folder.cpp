@@ -110,19 +110,16 @@ JobState JobState::from_json(const Json& json) {
     s.output = json.value("output", std::string());
     s.thumbnail = json.value("thumbnail", std::string());
     if (json.contains("quality")) s.quality = json["quality"];
-    // "class" is absent from states written before it existed: derive it from the exit.
-    const std::string end = json.value("class", std::string("?"));
-    s.end = JobEnd::None;
+    const std::string end = json.value("class", std::string());
     for (JobEnd e : {JobEnd::Done, JobEnd::FailedInput, JobEnd::FailedResource, JobEnd::Preempted})
         if (end == job_end_name(e)) s.end = e;
-    if (end == "?" || (end.empty() && s.status != JobStatus::Pending && s.status != JobStatus::Running)) {
+    if (!end.empty() && s.end == JobEnd::None) throw_error("unknown job class '{}'", end);
+    // States written before classes existed have none: derive it from how the job ended.
+    if (!json.contains("class"))
         s.end = s.status == JobStatus::Done          ? JobEnd::Done
                 : s.status == JobStatus::Interrupted ? JobEnd::Preempted
                 : s.status == JobStatus::Failed      ? classify_job_end(s.exit_code, s.signal, false)
                                                      : JobEnd::None;
-    } else if (!end.empty() && s.end == JobEnd::None) {
-        throw_error("unknown job class '{}'", end);
-    }
     return s;
 }
 
