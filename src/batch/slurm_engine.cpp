@@ -3,6 +3,7 @@
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
+#include <tdf/batch/job_runner.h>
 #include <tdf/guidance/subprocess.h>
 
 #include <fmt/ranges.h>
@@ -195,8 +196,38 @@ std::string slurm_array_script(const BatchFolder& folder, const std::vector<std:
     return s;
 }
 
+std::vector<SlurmJobGroup> slurm_job_groups(const BatchFolder& folder, const std::vector<std::size_t>& indices,
+                                            const SlurmOptions& options) {
+    std::map<std::pair<int, std::string>, std::vector<std::size_t>> groups;
+    for (std::size_t k : indices) {
+        const JobState s = folder.read_state(folder.jobs()[k]);
+        const int tries = s.end == JobEnd::FailedResource ? s.tries : 0;
+        std::map<std::string, int> failures;
+        for (const std::string& host : s.failed_hosts) ++failures[host];
+        std::string exclude;
+        for (const auto& [host, n] : failures)
+            if (n >= 2 && tries > 0) exclude += (exclude.empty() ? "" : ",") + host;
+        groups[{tries, exclude}].push_back(k);
+    }
+    std::vector<SlurmJobGroup> out;
+    for (const auto& [key, members] : groups) {
+        const auto& [tries, exclude] = key;
+        SlurmJobGroup group{members, {}};
+        // After the originals: sbatch takes the last of a repeated option.
+        for (const std::string& o : options.sbatch_options) {
+            const bool mem = o.rfind("--mem=", 0) == 0, time = o.rfind("--time=", 0) == 0;
+            if (tries > 0 && (mem || time))
+                group.extra.push_back(scale_sbatch_option(
+                    o, std::pow(mem ? options.retry_mem_factor : options.retry_time_factor, tries)));
+        }
+        if (!exclude.empty()) group.extra.push_back("--exclude=" + exclude);
+        out.push_back(std::move(group));
+    }
+    return out;
+}
+
 SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::size_t>& indices,
-                             const SlurmOptions& options, const std::vector<std::string>& extra) {
+                             const SlurmOptions& options) {
     if (indices.empty()) throw_error("nothing to submit: every job of '{}' is done", folder.root());
     const std::string dir = folder.path("slurm");
     ensure_folder(dir);
@@ -204,33 +235,45 @@ SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::s
     write_text_atomically(dir + "/options.json", options.to_json().dump(2) + "\n");
     SlurmSubmission submission;
     const int max_array_size = options.max_array_size > 0 ? options.max_array_size : slurm_max_array_size();
-    const auto arrays = split_array(indices, max_array_size);
+    struct Array {
+        std::size_t base;
+        std::vector<std::size_t> tasks;
+        std::vector<std::string> extra;
+    };
+    std::vector<Array> arrays;
+    for (const SlurmJobGroup& group : slurm_job_groups(folder, indices, options))
+        for (auto& [base, tasks] : split_array(group.indices, max_array_size))
+            arrays.push_back({base, tasks, group.extra});
     if (arrays.size() > 1)
-        log_info("{} jobs span {} arrays (MaxArraySize {}); each starts after the one before",
+        log_info("{} jobs in {} arrays (MaxArraySize {}, retry groups); each starts after the one before",
                  indices.size(),
                  arrays.size(),
                  max_array_size);
     std::vector<std::string> specs;
-    for (const auto& [base, tasks] : arrays) {
-        const std::string spec = slurm_array_spec(tasks, options.max_parallel);
+    Json extras = Json::array();
+    for (std::size_t a = 0; a < arrays.size(); ++a) {
+        const Array& array = arrays[a];
+        const std::string spec = slurm_array_spec(array.tasks, options.max_parallel);
         const std::string script =
-            dir + (arrays.size() == 1 && base == 0 ? std::string("/array.sh")
-                                                   : "/array_" + std::to_string(base) + ".sh");
-        write_script(script, slurm_array_script(folder, tasks, options, base));
+            dir + (arrays.size() == 1 ? std::string("/array.sh") : "/array_" + std::to_string(a) + ".sh");
+        write_script(script, slurm_array_script(folder, array.tasks, options, array.base));
         std::vector<std::string> array_args = options.sbatch_options;
-        array_args.insert(array_args.end(), extra.begin(), extra.end());
+        array_args.insert(array_args.end(), array.extra.begin(), array.extra.end());
         // One array after the other: %K then bounds the tasks of all of them together.
         if (!submission.array_jobs.empty())
             array_args.push_back("--dependency=afterany:" + submission.array_jobs.back());
         array_args.push_back(script);
         const std::string id = sbatch(options, array_args, dir, nullptr);
-        log_info("submitted Slurm array job {} ({} tasks, --array={}{})",
+        log_info("submitted Slurm array job {} ({} tasks, --array={}{}{}{})",
                  id,
-                 tasks.size(),
+                 array.tasks.size(),
                  spec,
-                 base > 0 ? ", job " + std::to_string(base) + " + task id" : std::string());
+                 array.base > 0 ? ", job " + std::to_string(array.base) + " + task id" : std::string(),
+                 array.extra.empty() ? "" : ", ",
+                 fmt::format("{}", fmt::join(array.extra, " ")));
         submission.array_jobs.push_back(id);
         specs.push_back(spec);
+        extras.push_back(array.extra);
     }
     submission.array_job = submission.array_jobs.front();
     submission.array_spec = specs.front();
@@ -262,10 +305,10 @@ SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::s
                         {"array_jobs", submission.array_jobs},
                         {"array", submission.array_spec},
                         {"arrays", specs},
+                        {"extra_options", extras},
                         {"summary_job", submission.summary_job},
                         {"submitted", utc_timestamp()},
-                        {"sbatch_options", options.sbatch_options},
-                        {"extra_options", extra}})
+                        {"sbatch_options", options.sbatch_options}})
                       .dump()
                << "\n";
     }
@@ -317,41 +360,16 @@ int submit_retry_round(const BatchFolder& folder) {
     const std::string path = folder.path("slurm/options.json");
     if (!fs::exists(path)) return 0;
     SlurmOptions options = SlurmOptions::from_json(load_json_file(path));
-    options.wait = false;
-    // Group by what the submission must say: the tries so far (the scale) and the nodes to avoid.
-    std::map<std::pair<int, std::string>, std::vector<std::size_t>> groups;
+    options.wait = false;  // the finish job must end: `tdf batch run --wait` follows the rounds
+    std::vector<std::size_t> retry;
     for (std::size_t k = 0; k < folder.jobs().size(); ++k) {
         const JobState s = folder.read_state(folder.jobs()[k]);
-        if (s.status != JobStatus::Failed || s.end != JobEnd::FailedResource || s.tries > options.max_retries)
-            continue;
-        std::map<std::string, int> failures;
-        for (const std::string& host : s.failed_hosts) ++failures[host];
-        std::string exclude;
-        for (const auto& [host, n] : failures)
-            if (n >= 2) exclude += (exclude.empty() ? "" : ",") + host;
-        groups[{s.tries, exclude}].push_back(k);
+        if (s.status == JobStatus::Failed && !failed_for_good(s, options.max_retries)) retry.push_back(k);
     }
-    int resubmitted = 0;
-    for (const auto& [key, indices] : groups) {
-        const auto& [tries, exclude] = key;
-        std::vector<std::string> extra;
-        for (const std::string& o : options.sbatch_options) {
-            const bool mem = o.rfind("--mem=", 0) == 0, time = o.rfind("--time=", 0) == 0;
-            if (mem || time)
-                extra.push_back(scale_sbatch_option(
-                    o, std::pow(mem ? options.retry_mem_factor : options.retry_time_factor, tries)));
-        }
-        if (!exclude.empty()) extra.push_back("--exclude=" + exclude);
-        // Later options win in sbatch, so the scaled ones override the originals.
-        log_info("retry round: {} job(s) after {} tries{}{}",
-                 indices.size(),
-                 tries,
-                 extra.empty() ? "" : ", ",
-                 fmt::format("{}", fmt::join(extra, " ")));
-        submit_slurm(folder, indices, options, extra);
-        resubmitted += int(indices.size());
-    }
-    return resubmitted;
+    if (retry.empty()) return 0;
+    log_info("retry round: {} job(s) that failed for a resource and have tries left", retry.size());
+    submit_slurm(folder, retry, options);
+    return int(retry.size());
 }
 
 }  // namespace tdf

@@ -392,3 +392,31 @@ TEST(BatchEngine, ResourceFailuresRecordTheirHost) {
     run_jobs(folder, plan);
     EXPECT_EQ(folder.read_state(jobs[0]).failed_hosts, (std::vector<std::string>{host_name(), host_name()}));
 }
+
+TEST(BatchEngine, RetriesUnderSlurmAskForMoreAndAvoidNodesThatFailedTwice) {
+    const std::string root = fresh("slurm_groups");
+    const auto jobs = parse_manifest("name,command,args\na,render,s.json\nb,render,s.json\nc,render,s.json\n", "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, "/opt/tdf", root);
+    JobState once;
+    once.status = JobStatus::Failed;
+    once.end = JobEnd::FailedResource;
+    once.tries = 1;
+    once.failed_hosts = {"n1"};
+    folder.write_state(jobs[0], once);
+    JobState twice = once;
+    twice.tries = 2;
+    twice.failed_hosts = {"n1", "n2", "n1"};
+    folder.write_state(jobs[1], twice);
+    SlurmOptions options;
+    options.sbatch_options = {"--mem=1000", "--time=10", "--partition=cpu"};
+    options.retry_mem_factor = 2;
+    options.retry_time_factor = 1.5;
+    const auto groups = slurm_job_groups(folder, {0, 1, 2}, options);
+    ASSERT_EQ(groups.size(), 3u);
+    EXPECT_EQ(groups[0].indices, (std::vector<std::size_t>{2}));  // never failed: as asked
+    EXPECT_TRUE(groups[0].extra.empty());
+    EXPECT_EQ(groups[1].indices, (std::vector<std::size_t>{0}));
+    EXPECT_EQ(groups[1].extra, (std::vector<std::string>{"--mem=2000", "--time=15"}));
+    EXPECT_EQ(groups[2].indices, (std::vector<std::size_t>{1}));
+    EXPECT_EQ(groups[2].extra, (std::vector<std::string>{"--mem=4000", "--time=23", "--exclude=n1"}));
+}

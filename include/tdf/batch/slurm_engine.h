@@ -15,7 +15,7 @@
 ///                         tdf job checkpoints at its next iteration, and the runner requeues the
 ///                         task (`scontrol requeue`), which continues with --resume
 ///   --chdir               the folder `tdf batch run` was started in (relative paths in args)
-/// `DIR/slurm/array_<b>.sh` when split: task i runs job b + i.
+/// `DIR/slurm/array_<k>.sh` when there are several arrays (split, or retry groups).
 /// `DIR/slurm/summary.sh`: `tdf batch finish DIR` after the arrays (afterany).
 /// `DIR/slurm/options.json`: these options, for the retry rounds.
 /// Extra sbatch options (partition, account, time, memory, ...) are passed to both submissions.
@@ -69,16 +69,26 @@ std::string slurm_array_spec(const std::vector<std::size_t>& indices, int max_pa
 std::string slurm_array_script(const BatchFolder& folder, const std::vector<std::size_t>& indices,
                                const SlurmOptions& options, std::size_t base = 0);
 
-/// Writes the scripts under DIR/slurm/ and options.json, submits the arrays and the finish job,
-/// and records them in DIR/slurm/submissions.jsonl. `extra` is added to the arrays' sbatch
-/// options (a retry round's scaled --mem/--time and --exclude). Throws tdf::Error with sbatch's
-/// message when it refuses.
-SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::size_t>& indices,
-                             const SlurmOptions& options, const std::vector<std::string>& extra = {});
+/// Jobs that must be submitted with the same extra sbatch options.
+struct SlurmJobGroup {
+    std::vector<std::size_t> indices;
+    std::vector<std::string> extra;  ///< scaled --mem/--time, --exclude
+};
 
-/// `tdf batch finish DIR` (the finish job): jobs failed-resource with tries left are submitted
-/// again, grouped by their tries and the nodes to exclude (a node where the job failed for a
-/// resource twice), with --mem/--time scaled; returns how many were resubmitted.
+/// `indices` grouped by what their submission must add: a job that failed for a resource after
+/// t tries gets the --mem/--time sbatch options scaled by factor^t and --exclude=<the nodes where
+/// it failed for a resource twice or more>; other jobs nothing.
+std::vector<SlurmJobGroup> slurm_job_groups(const BatchFolder& folder, const std::vector<std::size_t>& indices,
+                                            const SlurmOptions& options);
+
+/// Writes the scripts under DIR/slurm/ and options.json, submits the arrays of every group (one
+/// after the other) and ONE finish job after all of them, and records them in
+/// DIR/slurm/submissions.jsonl. Throws tdf::Error with sbatch's message when it refuses.
+SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::size_t>& indices,
+                             const SlurmOptions& options);
+
+/// `tdf batch finish DIR` (the finish job): submits the jobs that failed for a resource and have
+/// tries left (the options recorded in DIR/slurm/options.json) as a new round; returns how many.
 int submit_retry_round(const BatchFolder& folder);
 
 /// The finish job the latest submission recorded in DIR/slurm/submissions.jsonl, "" when none.
