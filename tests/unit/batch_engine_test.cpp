@@ -113,7 +113,7 @@ TEST(BatchEngine, ExitCodesAndSignalsClassifyAJobsEnd) {
     EXPECT_EQ(classify_job_end(1, 0, false), JobEnd::FailedInput);  // tdf::Error, usage
     EXPECT_EQ(classify_job_end(2, 0, false), JobEnd::FailedInput);  // compare: size mismatch
     EXPECT_EQ(classify_job_end(71, 0, false), JobEnd::FailedResource);  // std::bad_alloc
-    EXPECT_EQ(classify_job_end(70, 0, false), JobEnd::FailedResource);  // unexpected (disk full)
+    EXPECT_EQ(classify_job_end(70, 0, false), JobEnd::FailedResource);  // another exception than tdf::Error
     EXPECT_EQ(classify_job_end(75, 0, false), JobEnd::Preempted);       // checkpointed on a signal
     EXPECT_EQ(classify_job_end(-1, SIGKILL, false), JobEnd::FailedResource);
     EXPECT_EQ(classify_job_end(-1, SIGSEGV, false), JobEnd::FailedResource);

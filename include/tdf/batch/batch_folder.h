@@ -28,7 +28,7 @@ const char* job_status_name(JobStatus status);
 /// done; failed-input: deterministic (tdf exit 1, a bad mesh or scene, or any exit code not
 /// listed below), never retried; failed-resource: out of memory (exit kExitOutOfMemory or
 /// SIGKILL), the --timeout, a signal other than the stop signals, an unexpected error (exit
-/// kExitUnexpected, e.g. a full disk), a runner or node that died: retried up to --max-retries
+/// kExitUnexpected: a system error or a bug), a runner or node that died: retried up to --max-retries
 /// times; preempted: stopped by SIGTERM/SIGINT/SIGUSR1 or exit kExitInterrupted (requeued or
 /// continued by the next run, not counted as a try). None while pending or running.
 enum class JobEnd { None, Done, FailedInput, FailedResource, Preempted };
