@@ -1,5 +1,6 @@
 // `tdf batch grid|run|status|task`: many tdf jobs from a manifest, on this machine or as one
 // Slurm job array (README "tdf batch").
+#include <sys/resource.h>
 #include <tdf/batch/batch_summary.h>
 #include <tdf/batch/grid.h>
 #include <tdf/batch/job_runner.h>
@@ -9,8 +10,6 @@
 #include <tdf/core/log.h>
 #include <tdf/core/parallel.h>
 #include <tdf/train/run_guard.h>
-
-#include <sys/resource.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -94,8 +93,9 @@ int run_batch(const BatchOptions& o) {
         throw_error("--engine must be local or slurm, not '{}'", o.engine);
     // Each Slurm task runs one job: there is no runner to cap or time jobs across the array.
     if (o.engine == "slurm" && (o.timeout > 0 || o.max_failures > 0))
-        throw_error("--timeout and --max-failures apply to --engine local; under Slurm give "
-                    "--sbatch-option=--time=... (Slurm enforces it; --signal-seconds warns the task)");
+        throw_error(
+            "--timeout and --max-failures apply to --engine local; under Slurm give "
+            "--sbatch-option=--time=... (Slurm enforces it; --signal-seconds warns the task)");
     // Every problem a row can have is found here, before anything is written or launched.
     const std::vector<BatchJob> jobs = read_manifest(o.manifest);
     check_job_inputs(jobs, fs::current_path().string());

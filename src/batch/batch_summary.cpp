@@ -177,7 +177,8 @@ std::string batch_status_table(const BatchFolder& folder) {
     std::size_t width = 4;
     for (const BatchJob& job : folder.jobs()) width = std::max(width, job.name.size());
     const char* row = "{:<{}}  {:<11}  {:<15}  {:>9}  {:>8}  {:>5}  {}\n";
-    out += fmt::format(fmt::runtime(row), "job", width, "status", "class", "seconds", "attempts", "tries", "error / output");
+    out += fmt::format(
+        fmt::runtime(row), "job", width, "status", "class", "seconds", "attempts", "tries", "error / output");
     for (const BatchJob& job : folder.jobs()) {
         const JobState s = folder.read_state(job);
         const std::string detail =
@@ -195,16 +196,17 @@ std::string batch_status_table(const BatchFolder& folder) {
                            detail);
     }
     const BatchTotals t = batch_totals(folder);
-    out += fmt::format("{} jobs: {} done, {} failed, {} interrupted, {} running, {} pending ({} failed-input, "
-                       "{} failed-resource)\n",
-                       t.total(),
-                       t.done,
-                       t.failed,
-                       t.interrupted,
-                       t.running,
-                       t.pending,
-                       t.failed_input,
-                       t.failed_resource);
+    out += fmt::format(
+        "{} jobs: {} done, {} failed, {} interrupted, {} running, {} pending ({} failed-input, "
+        "{} failed-resource)\n",
+        t.total(),
+        t.done,
+        t.failed,
+        t.interrupted,
+        t.running,
+        t.pending,
+        t.failed_input,
+        t.failed_resource);
     return out;
 }
 

@@ -10,8 +10,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <deque>
 #include <cstdlib>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -269,10 +269,11 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
         log_warning("failed {} ({}): {}", job.name, job_end_name(state.end), state.error);
         if (plan.max_failures > 0 && outcome.failed >= plan.max_failures && !outcome.capped) {
             outcome.capped = true;
-            log_warning("{} job(s) failed for good (--max-failures {}): starting no new job; the "
-                        "next run continues the rest",
-                        outcome.failed,
-                        plan.max_failures);
+            log_warning(
+                "{} job(s) failed for good (--max-failures {}): starting no new job; the "
+                "next run continues the rest",
+                outcome.failed,
+                plan.max_failures);
         }
     };
 
@@ -367,7 +368,8 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
             const Clock::time_point kill_at = term + seconds(kTimeoutGraceSeconds);
             if (!r.timed_out && now >= term) {
                 r.timed_out = true;
-                log_warning("{} ran past --timeout {:.0f} s: SIGTERM", folder.jobs()[r.index].name,
+                log_warning("{} ran past --timeout {:.0f} s: SIGTERM",
+                            folder.jobs()[r.index].name,
                             plan.timeout_seconds);
                 kill(-pid, SIGTERM);
             }

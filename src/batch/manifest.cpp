@@ -44,8 +44,19 @@ void validate_job(const BatchJob& job, const std::string& where) {
 bool has_input_extension(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    static const std::set<std::string> kInputs = {".json", ".obj", ".gltf", ".glb", ".ply", ".exr", ".png",
-                                                  ".jpg",  ".jpeg", ".hdr", ".tif", ".tiff", ".npz"};
+    static const std::set<std::string> kInputs = {".json",
+                                                  ".obj",
+                                                  ".gltf",
+                                                  ".glb",
+                                                  ".ply",
+                                                  ".exr",
+                                                  ".png",
+                                                  ".jpg",
+                                                  ".jpeg",
+                                                  ".hdr",
+                                                  ".tif",
+                                                  ".tiff",
+                                                  ".npz"};
     return kInputs.count(ext) > 0;
 }
 

@@ -1,12 +1,11 @@
+#include <fmt/ranges.h>
 #include <sys/stat.h>
+#include <tdf/batch/job_runner.h>
 #include <tdf/batch/slurm_engine.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
-#include <tdf/batch/job_runner.h>
 #include <tdf/guidance/subprocess.h>
-
-#include <fmt/ranges.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -101,8 +100,8 @@ SlurmOptions SlurmOptions::from_json(const Json& json) {
 int slurm_max_array_size() {
     constexpr int kSlurmDefault = 1001;
     try {
-        const std::string out = fs::temp_directory_path().string() + "/tdf_scontrol_" +
-                                std::to_string(getpid()) + ".txt";
+        const std::string out =
+            fs::temp_directory_path().string() + "/tdf_scontrol_" + std::to_string(getpid()) + ".txt";
         const ProcessOutcome outcome = run_process({"scontrol", "show", "config"}, "", 60, out, "");
         const std::string text = read_text_file(out);
         fs::remove(out);
@@ -136,10 +135,14 @@ std::string scale_sbatch_option(const std::string& option, double factor) {
         const double number = std::strtod(value.c_str(), &end);
         const std::string unit = end ? std::string(end) : std::string();
         double mb = number;  // Slurm's default unit
-        if (unit == "K" || unit == "k") mb = number / 1024;
-        else if (unit == "G" || unit == "g") mb = number * 1024;
-        else if (unit == "T" || unit == "t") mb = number * 1024 * 1024;
-        else if (!unit.empty() && unit != "M" && unit != "m") return option;  // not ours to read
+        if (unit == "K" || unit == "k")
+            mb = number / 1024;
+        else if (unit == "G" || unit == "g")
+            mb = number * 1024;
+        else if (unit == "T" || unit == "t")
+            mb = number * 1024 * 1024;
+        else if (!unit.empty() && unit != "M" && unit != "m")
+            return option;  // not ours to read
         return "--mem=" + ceil_of(mb * factor);
     }
     if (option.rfind("--time=", 0) == 0) {
@@ -160,7 +163,8 @@ std::string scale_sbatch_option(const std::string& option, double factor) {
         }
         double minutes = 0;
         if (dash != std::string::npos) {
-            minutes = parts[0] * 60 + (parts.size() > 1 ? parts[1] : 0) + (parts.size() > 2 ? parts[2] / 60 : 0);
+            minutes =
+                parts[0] * 60 + (parts.size() > 1 ? parts[1] : 0) + (parts.size() > 2 ? parts[2] / 60 : 0);
         } else if (parts.size() == 3) {
             minutes = parts[0] * 60 + parts[1] + parts[2] / 60;
         } else {
@@ -187,16 +191,17 @@ std::string slurm_array_script(const BatchFolder& folder, const std::vector<std:
     s += "#SBATCH --signal=B:USR1@" + std::to_string(options.signal_seconds) + "\n";
     s += "#SBATCH --chdir=" + folder.working_folder() + "\n";
     s += "# exec: the task runner is the batch shell, so --signal=B: reaches it directly.\n";
-    const std::string task =
-        base == 0 ? std::string("\"$SLURM_ARRAY_TASK_ID\"")
-                  : "\"$((" + std::to_string(base) + " + SLURM_ARRAY_TASK_ID))\"";
-    if (base > 0) s += "# Task i runs job " + std::to_string(base) + " + i (the array was split at MaxArraySize).\n";
+    const std::string task = base == 0 ? std::string("\"$SLURM_ARRAY_TASK_ID\"")
+                                       : "\"$((" + std::to_string(base) + " + SLURM_ARRAY_TASK_ID))\"";
+    if (base > 0)
+        s += "# Task i runs job " + std::to_string(base) + " + i (the array was split at MaxArraySize).\n";
     s += "exec " + shell_quote(folder.tdf_executable()) + " batch task " + shell_quote(folder.root()) + " " +
          task + "\n";
     return s;
 }
 
-std::vector<SlurmJobGroup> slurm_job_groups(const BatchFolder& folder, const std::vector<std::size_t>& indices,
+std::vector<SlurmJobGroup> slurm_job_groups(const BatchFolder& folder,
+                                            const std::vector<std::size_t>& indices,
                                             const SlurmOptions& options) {
     std::map<std::pair<int, std::string>, std::vector<std::size_t>> groups;
     for (std::size_t k : indices) {
@@ -343,15 +348,15 @@ std::string latest_finish_job(const BatchFolder& folder) {
 void wait_for_slurm_job(const BatchFolder& folder, const SlurmOptions& options, const std::string& id) {
     int exit_code = -1;
     std::vector<std::string> args = options.sbatch_options;  // partition, account: where it may run
-    for (const std::string& a : std::vector<std::string>{
-             "--job-name=tdf-wait",
-             "--dependency=afterany:" + id,
-             "--kill-on-invalid-dep=yes",  // a job purged already: nothing to wait for
-             "--cpus-per-task=1",
-             "--ntasks=1",
-             "--output=/dev/null",
-             "--wait",
-             "--wrap=true"})
+    for (const std::string& a :
+         std::vector<std::string>{"--job-name=tdf-wait",
+                                  "--dependency=afterany:" + id,
+                                  "--kill-on-invalid-dep=yes",  // a job purged already: nothing to wait for
+                                  "--cpus-per-task=1",
+                                  "--ntasks=1",
+                                  "--output=/dev/null",
+                                  "--wait",
+                                  "--wrap=true"})
         args.push_back(a);
     sbatch(options, args, folder.path("slurm"), &exit_code);
 }

@@ -110,8 +110,8 @@ TEST(BatchEngine, ARunningStateWhoseRunnerIsGoneReadsAsFailed) {
 }
 
 TEST(BatchEngine, ExitCodesAndSignalsClassifyAJobsEnd) {
-    EXPECT_EQ(classify_job_end(1, 0, false), JobEnd::FailedInput);  // tdf::Error, usage
-    EXPECT_EQ(classify_job_end(2, 0, false), JobEnd::FailedInput);  // compare: size mismatch
+    EXPECT_EQ(classify_job_end(1, 0, false), JobEnd::FailedInput);      // tdf::Error, usage
+    EXPECT_EQ(classify_job_end(2, 0, false), JobEnd::FailedInput);      // compare: size mismatch
     EXPECT_EQ(classify_job_end(71, 0, false), JobEnd::FailedResource);  // std::bad_alloc
     EXPECT_EQ(classify_job_end(70, 0, false), JobEnd::FailedResource);  // another exception than tdf::Error
     EXPECT_EQ(classify_job_end(75, 0, false), JobEnd::Preempted);       // checkpointed on a signal
@@ -206,7 +206,7 @@ TEST(BatchEngine, MaxFailuresStopsStartingJobsAndTheNextRunContinues) {
     const BatchFolder folder = BatchFolder::create(root, jobs, fake_tdf(root), root);
     JobRunPlan plan;
     plan.indices = {0, 1, 2, 3};
-    plan.parallel = 1;    // in manifest order: the cap is reached before a and b
+    plan.parallel = 1;     // in manifest order: the cap is reached before a and b
     plan.max_retries = 0;  // (a retry would go to the end of the queue, after a and b)
     plan.max_failures = 2;
     const JobRunOutcome outcome = run_jobs(folder, plan);
@@ -306,11 +306,11 @@ TEST(BatchEngine, LocalEngineRunsEveryJobAndAFailureDoesNotStopTheOthers) {
     EXPECT_EQ(summary["jobs"][0]["output"], "jobs/a");
     EXPECT_EQ(summary["jobs"][0]["log"], "logs/a.log");
     const std::string csv = read_text_file(root + "/summary.csv");
-    EXPECT_EQ(
-        csv.substr(0, csv.find('\n')),
-        "job,command,status,class,exit_code,signal,error,attempts,tries,seconds,seconds_total,started,finished,"
-        "host,slurm_job,"
-        "output,log,thumbnail,quality.max_error,quality.psnr,quality.result");
+    EXPECT_EQ(csv.substr(0, csv.find('\n')),
+              "job,command,status,class,exit_code,signal,error,attempts,tries,seconds,seconds_total,started,"
+              "finished,"
+              "host,slurm_job,"
+              "output,log,thumbnail,quality.max_error,quality.psnr,quality.result");
     EXPECT_NE(csv.find("\ncmp,compare,done,done,0,0,"), std::string::npos) << csv;
     EXPECT_NE(
         batch_status_table(folder).find("5 jobs: 4 done, 1 failed, 0 interrupted, 0 running, 0 pending"),
@@ -362,7 +362,8 @@ TEST(BatchEngine, ArraysAreSplitBelowMaxArraySize) {
     const auto jobs = parse_manifest("name,command,args\na,render,s.json\n", "m.csv");
     const BatchFolder folder = BatchFolder::create(root, jobs, "/opt/tdf", "/home/me");
     const std::string script = slurm_array_script(folder, {0, 1}, SlurmOptions(), 1000);
-    EXPECT_NE(script.find("batch task '" + root + "' \"$((1000 + SLURM_ARRAY_TASK_ID))\"\n"), std::string::npos)
+    EXPECT_NE(script.find("batch task '" + root + "' \"$((1000 + SLURM_ARRAY_TASK_ID))\"\n"),
+              std::string::npos)
         << script;
 }
 
@@ -395,7 +396,8 @@ TEST(BatchEngine, ResourceFailuresRecordTheirHost) {
 
 TEST(BatchEngine, RetriesUnderSlurmAskForMoreAndAvoidNodesThatFailedTwice) {
     const std::string root = fresh("slurm_groups");
-    const auto jobs = parse_manifest("name,command,args\na,render,s.json\nb,render,s.json\nc,render,s.json\n", "m.csv");
+    const auto jobs =
+        parse_manifest("name,command,args\na,render,s.json\nb,render,s.json\nc,render,s.json\n", "m.csv");
     const BatchFolder folder = BatchFolder::create(root, jobs, "/opt/tdf", root);
     JobState once;
     once.status = JobStatus::Failed;

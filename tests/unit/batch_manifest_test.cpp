@@ -108,7 +108,8 @@ TEST(BatchManifest, MissingInputFilesNameTheRow) {
         "m.csv");
     EXPECT_EQ(error_of([&] { check_job_inputs(missing, dir); }),
               "m.csv:3: job 'b': input file 'gone.exr' does not exist (relative to " + dir + ")");
-    const auto absolute = parse_manifest("name,command,args\na,optimize,s.json mesh=/no/such/mesh.obj\n", "m.csv");
+    const auto absolute =
+        parse_manifest("name,command,args\na,optimize,s.json mesh=/no/such/mesh.obj\n", "m.csv");
     EXPECT_EQ(error_of([&] { check_job_inputs(absolute, dir); }),
               "m.csv:2: job 'a': input file '/no/such/mesh.obj' does not exist");
 }

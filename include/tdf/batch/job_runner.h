@@ -31,12 +31,12 @@ struct JobRunPlan {
 constexpr double kTimeoutGraceSeconds = 10;
 
 struct JobRunOutcome {
-    int started = 0;      ///< attempts started (retries included)
+    int started = 0;  ///< attempts started (retries included)
     int done = 0;
-    int failed = 0;       ///< jobs that failed for good (input, or resource with no retry left)
-    int interrupted = 0;  ///< preempted: stopped by a signal, continued by the next run
-    int retried = 0;      ///< attempts that failed for a resource and were run again
-    int not_started = 0;  ///< planned jobs never started (stop signal or --max-failures)
+    int failed = 0;        ///< jobs that failed for good (input, or resource with no retry left)
+    int interrupted = 0;   ///< preempted: stopped by a signal, continued by the next run
+    int retried = 0;       ///< attempts that failed for a resource and were run again
+    int not_started = 0;   ///< planned jobs never started (stop signal or --max-failures)
     bool stopped = false;  ///< a stop signal arrived: no new job was started after it
     bool capped = false;   ///< max_failures was reached: no new job was started after it
 };

@@ -34,20 +34,20 @@ struct SlurmOptions {
     std::vector<std::string> sbatch_options;  ///< passed through to sbatch (e.g. --partition=cpu)
     bool wait = false;  ///< block (sbatch --wait on the summary job) until everything ended
     std::string sbatch = "sbatch";
-    int max_array_size = 0;          ///< split above this many indices; 0 = scontrol's MaxArraySize
-    int max_retries = 2;             ///< tries after the first for failed-resource jobs (rounds)
-    double retry_mem_factor = 1;     ///< a retry's --mem: the given --mem x factor^(tries so far)
-    double retry_time_factor = 1;    ///< a retry's --time likewise
+    int max_array_size = 0;        ///< split above this many indices; 0 = scontrol's MaxArraySize
+    int max_retries = 2;           ///< tries after the first for failed-resource jobs (rounds)
+    double retry_mem_factor = 1;   ///< a retry's --mem: the given --mem x factor^(tries so far)
+    double retry_time_factor = 1;  ///< a retry's --time likewise
 
     Json to_json() const;
     static SlurmOptions from_json(const Json& json);
 };
 
 struct SlurmSubmission {
-    std::string array_job;       ///< Slurm job id of the (first) array
+    std::string array_job;                ///< Slurm job id of the (first) array
     std::vector<std::string> array_jobs;  ///< every array, in order
-    std::string summary_job;     ///< id of the dependent summary job
-    std::string array_spec;      ///< the (first) --array value
+    std::string summary_job;              ///< id of the dependent summary job
+    std::string array_spec;               ///< the (first) --array value
 };
 
 /// The cluster's MaxArraySize (`scontrol show config`); Slurm's default 1001 when it cannot tell.
@@ -78,7 +78,8 @@ struct SlurmJobGroup {
 /// `indices` grouped by what their submission must add: a job that failed for a resource after
 /// t tries gets the --mem/--time sbatch options scaled by factor^t and --exclude=<the nodes where
 /// it failed for a resource twice or more>; other jobs nothing.
-std::vector<SlurmJobGroup> slurm_job_groups(const BatchFolder& folder, const std::vector<std::size_t>& indices,
+std::vector<SlurmJobGroup> slurm_job_groups(const BatchFolder& folder,
+                                            const std::vector<std::size_t>& indices,
                                             const SlurmOptions& options);
 
 /// Writes the scripts under DIR/slurm/ and options.json, submits the arrays of every group (one
