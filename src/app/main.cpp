@@ -1,13 +1,17 @@
 // tdf: one binary, one subcommand per job. Bad input surfaces here as tdf::Error and becomes
 // one line "tdf <command>: <message>" and exit code 1; usage errors (unknown option, missing
-// argument, value out of range or not finite) are one line and exit code 1 as well.
+// argument, value out of range or not finite) are one line and exit code 1 as well. Running
+// out of memory (kExitOutOfMemory) and any other exception (kExitUnexpected) have codes of their
+// own, so that `tdf batch` retries those and not bad input (docs/commands/batch.md).
 #include <tdf/core/error.h>
+#include <tdf/core/exit_codes.h>
 #include <tdf/core/log.h>
 #include <tdf/core/parallel.h>
 #include <tdf/train/run_guard.h>
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -90,6 +94,25 @@ std::string positional_arguments(const CLI::App& app) {
     return out;
 }
 
+// Test-only (tests/batch/batch_retry_test.sh, bench/batch_1000.sh): TDF_TEST_KILL_JOBS is a
+// comma-separated list of `name[:N]`; the batch job `name` (TDF_BATCH_JOB, set by `tdf batch`)
+// kills itself with SIGKILL on its attempts 1 to N (TDF_BATCH_ATTEMPT; N defaults to 1), as the
+// OOM killer would. Deterministic, unlike racing a kill from outside.
+void kill_self_if_test_victim() {
+    const char* victims = std::getenv("TDF_TEST_KILL_JOBS");
+    const char* job = std::getenv("TDF_BATCH_JOB");
+    const char* attempt = std::getenv("TDF_BATCH_ATTEMPT");
+    if (!victims || !job || !attempt) return;
+    const std::string list = std::string(",") + victims + ",";
+    const std::string name = job;
+    for (std::size_t at = 0; (at = list.find("," + name, at)) != std::string::npos; ++at) {
+        const std::size_t end = at + 1 + name.size();
+        if (list[end] != ',' && list[end] != ':') continue;
+        const int last_attempt = list[end] == ':' ? std::atoi(list.c_str() + end + 1) : 1;
+        if (std::atoi(attempt) <= last_attempt) std::raise(SIGKILL);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -168,6 +191,7 @@ int main(int argc, char** argv) {
 
     set_log_level(global.quiet ? LogLevel::Quiet : global.verbose ? LogLevel::Verbose : LogLevel::Info);
     ThreadLimit limit(global.threads);
+    kill_self_if_test_victim();
     for (auto& c : commands) {
         if (!c.app->parsed()) continue;
         const std::string name = c.app->get_name();
@@ -188,10 +212,10 @@ int main(int argc, char** argv) {
                          "memory than is available)\n",
                          name.c_str(),
                          inputs.empty() ? "the command" : inputs.c_str());
-            return 1;
+            return kExitOutOfMemory;
         } catch (const std::exception& e) {
             std::fprintf(stderr, "tdf %s: unexpected error: %s\n", name.c_str(), e.what());
-            return 1;
+            return kExitUnexpected;
         }
     }
     return 0;

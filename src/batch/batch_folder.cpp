@@ -2,7 +2,9 @@
 #include <tdf/batch/batch_folder.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
+#include <tdf/core/exit_codes.h>
 #include <tdf/guidance/subprocess.h>
+#include <tdf/train/run_guard.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -30,6 +32,33 @@ const char* job_status_name(JobStatus status) {
     return "pending";
 }
 
+const char* job_end_name(JobEnd end) {
+    switch (end) {
+        case JobEnd::None:
+            return "";
+        case JobEnd::Done:
+            return "done";
+        case JobEnd::FailedInput:
+            return "failed-input";
+        case JobEnd::FailedResource:
+            return "failed-resource";
+        case JobEnd::Preempted:
+            return "preempted";
+    }
+    return "";
+}
+
+JobEnd classify_job_end(int exit_code, int signal, bool timed_out) {
+    if (timed_out) return JobEnd::FailedResource;
+    if (signal == SIGTERM || signal == SIGINT || signal == SIGUSR1 || exit_code == kExitInterrupted)
+        return JobEnd::Preempted;
+    // SIGKILL is what the kernel's (or a cgroup's) OOM killer sends; other signals are crashes
+    // or a dying node. A crash that is deterministic costs --max-retries more tries, no more.
+    if (signal != 0) return JobEnd::FailedResource;
+    if (exit_code == kExitOutOfMemory || exit_code == kExitUnexpected) return JobEnd::FailedResource;
+    return JobEnd::FailedInput;
+}
+
 namespace {
 JobStatus parse_status(const std::string& s) {
     for (JobStatus status :
@@ -41,15 +70,18 @@ JobStatus parse_status(const std::string& s) {
 
 Json JobState::to_json() const {
     return {{"status", job_status_name(status)},
+            {"class", job_end_name(end)},
             {"exit_code", exit_code},
             {"signal", signal},
             {"error", error},
             {"attempts", attempts},
+            {"tries", tries},
             {"seconds", seconds},
             {"seconds_total", seconds_total},
             {"started", started},
             {"finished", finished},
             {"host", host},
+            {"failed_hosts", failed_hosts},
             {"pid", pid},
             {"slurm_job", slurm_job},
             {"command_line", command_line},
@@ -65,17 +97,29 @@ JobState JobState::from_json(const Json& json) {
     s.signal = json.value("signal", 0);
     s.error = json.value("error", std::string());
     s.attempts = json.value("attempts", 0);
+    s.tries = json.value("tries", s.attempts);
     s.seconds = json.value("seconds", 0.0);
     s.seconds_total = json.value("seconds_total", 0.0);
     s.started = json.value("started", std::string());
     s.finished = json.value("finished", std::string());
     s.host = json.value("host", std::string());
+    s.failed_hosts = json.value("failed_hosts", std::vector<std::string>());
     s.pid = json.value("pid", 0);
     s.slurm_job = json.value("slurm_job", std::string());
     s.command_line = json.value("command_line", std::string());
     s.output = json.value("output", std::string());
     s.thumbnail = json.value("thumbnail", std::string());
     if (json.contains("quality")) s.quality = json["quality"];
+    const std::string end = json.value("class", std::string());
+    for (JobEnd e : {JobEnd::Done, JobEnd::FailedInput, JobEnd::FailedResource, JobEnd::Preempted})
+        if (end == job_end_name(e)) s.end = e;
+    if (!end.empty() && s.end == JobEnd::None) throw_error("unknown job class '{}'", end);
+    // States written before classes existed have none: derive it from how the job ended.
+    if (!json.contains("class"))
+        s.end = s.status == JobStatus::Done          ? JobEnd::Done
+                : s.status == JobStatus::Interrupted ? JobEnd::Preempted
+                : s.status == JobStatus::Failed      ? classify_job_end(s.exit_code, s.signal, false)
+                                                     : JobEnd::None;
     return s;
 }
 
@@ -203,7 +247,11 @@ JobState BatchFolder::read_state(const BatchJob& job) const {
         state.host == host_name() && state.pid > 0 && kill(state.pid, 0) != 0 && errno == ESRCH;
     if (same_host_and_gone ||
         (!state.slurm_job.empty() && !slurm_task_alive(state.slurm_job, path("state")))) {
+        // The runner itself was killed (OOM killer, node failure): not the job's input.
         state.status = JobStatus::Failed;
+        state.end = JobEnd::FailedResource;
+        state.tries += 1;  // the attempt ended, unrecorded
+        state.failed_hosts.push_back(state.host);
         state.error = "the runner stopped without recording a result (killed?)";
     }
     return state;

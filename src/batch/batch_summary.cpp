@@ -19,7 +19,10 @@ int BatchTotals::exit_code() const {
 BatchTotals batch_totals(const BatchFolder& folder) {
     BatchTotals t;
     for (const BatchJob& job : folder.jobs()) {
-        switch (folder.read_state(job).status) {
+        const JobState state = folder.read_state(job);
+        if (state.status == JobStatus::Failed)
+            ++(state.end == JobEnd::FailedResource ? t.failed_resource : t.failed_input);
+        switch (state.status) {
             case JobStatus::Pending:
                 ++t.pending;
                 break;
@@ -76,9 +79,12 @@ Json batch_summary_json(const BatchFolder& folder) {
         jobs.push_back({{"job", job.name},
                         {"command", job.command},
                         {"status", job_status_name(s.status)},
+                        {"class", job_end_name(s.end)},
                         {"exit_code", s.exit_code},
+                        {"signal", s.signal},
                         {"error", s.error},
                         {"attempts", s.attempts},
+                        {"tries", s.tries},
                         {"seconds", s.seconds},
                         {"seconds_total", s.seconds_total},
                         {"started", s.started},
@@ -96,6 +102,8 @@ Json batch_summary_json(const BatchFolder& folder) {
              {{"jobs", t.total()},
               {"done", t.done},
               {"failed", t.failed},
+              {"failed_input", t.failed_input},
+              {"failed_resource", t.failed_resource},
               {"interrupted", t.interrupted},
               {"running", t.running},
               {"pending", t.pending}}},
@@ -113,9 +121,12 @@ void write_batch_summary(const BatchFolder& folder) {
     const std::vector<std::string> columns = {"job",
                                               "command",
                                               "status",
+                                              "class",
                                               "exit_code",
+                                              "signal",
                                               "error",
                                               "attempts",
+                                              "tries",
                                               "seconds",
                                               "seconds_total",
                                               "started",
@@ -165,36 +176,37 @@ std::string batch_status_table(const BatchFolder& folder) {
     std::string out;
     std::size_t width = 4;
     for (const BatchJob& job : folder.jobs()) width = std::max(width, job.name.size());
-    out += fmt::format("{:<{}}  {:<11}  {:>9}  {:>8}  {}\n",
-                       "job",
-                       width,
-                       "status",
-                       "seconds",
-                       "attempts",
-                       "error / output");
-    BatchTotals t;
+    const char* row = "{:<{}}  {:<11}  {:<15}  {:>9}  {:>8}  {:>5}  {}\n";
+    out += fmt::format(
+        fmt::runtime(row), "job", width, "status", "class", "seconds", "attempts", "tries", "error / output");
     for (const BatchJob& job : folder.jobs()) {
         const JobState s = folder.read_state(job);
         const std::string detail =
             s.status == JobStatus::Failed || s.status == JobStatus::Interrupted ? s.error
             : s.status == JobStatus::Pending                                    ? std::string()
                                              : inside(folder, folder.output_folder(job));
-        out += fmt::format("{:<{}}  {:<11}  {:>9.1f}  {:>8}  {}\n",
+        out += fmt::format(fmt::runtime(row),
                            job.name,
                            width,
                            job_status_name(s.status),
-                           s.seconds_total,
+                           s.end == JobEnd::None ? "-" : job_end_name(s.end),
+                           fmt::format("{:.1f}", s.seconds_total),
                            s.attempts,
+                           s.tries,
                            detail);
     }
-    t = batch_totals(folder);
-    out += fmt::format("{} jobs: {} done, {} failed, {} interrupted, {} running, {} pending\n",
-                       t.total(),
-                       t.done,
-                       t.failed,
-                       t.interrupted,
-                       t.running,
-                       t.pending);
+    const BatchTotals t = batch_totals(folder);
+    out += fmt::format(
+        "{} jobs: {} done, {} failed, {} interrupted, {} running, {} pending ({} failed-input, "
+        "{} failed-resource)\n",
+        t.total(),
+        t.done,
+        t.failed,
+        t.interrupted,
+        t.running,
+        t.pending,
+        t.failed_input,
+        t.failed_resource);
     return out;
 }
 

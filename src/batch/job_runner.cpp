@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -112,8 +113,13 @@ std::vector<std::string> job_command_line(const BatchFolder& folder, const Batch
     return argv;
 }
 
+bool failed_for_good(const JobState& state, int max_retries) {
+    return state.status == JobStatus::Failed &&
+           (state.end != JobEnd::FailedResource || state.tries > max_retries);
+}
+
 void collect_job_result(const BatchFolder& folder, const BatchJob& job, int exit_code, int signal,
-                        const std::string& log_tail, JobState& state) {
+                        bool timed_out, const std::string& log_tail, JobState& state) {
     const std::string out = folder.output_folder(job);
     state.exit_code = exit_code;
     state.signal = signal;
@@ -121,23 +127,34 @@ void collect_job_result(const BatchFolder& folder, const BatchJob& job, int exit
     state.quality = Json::object();
     const auto records = completion_records(out);
     const bool needs_record = job.command == "optimize" || job.command == "render";
-    if (exit_code == 0 && (!needs_record || !records.empty())) {
+    if (!timed_out && exit_code == 0 && (!needs_record || !records.empty())) {
         state.status = JobStatus::Done;
-    } else if (exit_code == kExitInterrupted || signal == SIGTERM || signal == SIGINT || signal == SIGUSR1) {
+        state.end = JobEnd::Done;
+    } else if (!timed_out && exit_code == 0) {
         state.status = JobStatus::Interrupted;
-        state.error = error_line(log_tail);
-        if (state.error.empty()) state.error = "stopped by " + signal_name(signal);
-    } else if (exit_code == 0) {
-        state.status = JobStatus::Interrupted;
+        state.end = JobEnd::Preempted;
         state.error = "exited without a completion record (--stop-after?); the next run continues it";
     } else {
-        state.status = JobStatus::Failed;
+        state.end = classify_job_end(exit_code, signal, timed_out);
         state.error = error_line(log_tail);
-        if (signal != 0)
-            state.error =
-                "killed by " + signal_name(signal) + (state.error.empty() ? "" : ": " + state.error);
-        if (state.error.empty()) state.error = "exit code " + std::to_string(exit_code);
+        if (state.end == JobEnd::Preempted) {
+            state.status = JobStatus::Interrupted;
+            if (state.error.empty()) state.error = "stopped by " + signal_name(signal);
+        } else {
+            state.status = JobStatus::Failed;
+            if (timed_out)
+                state.error = fmt::format("timed out after {:.0f} s (--timeout){}",
+                                          state.seconds,
+                                          state.error.empty() ? "" : ": " + state.error);
+            else if (signal != 0)
+                state.error =
+                    "killed by " + signal_name(signal) + (state.error.empty() ? "" : ": " + state.error);
+            if (state.error.empty()) state.error = "exit code " + std::to_string(exit_code);
+        }
     }
+    if (state.end != JobEnd::Preempted) state.tries += 1;
+    // Under Slurm, a node where a job failed twice for a resource is excluded on its retry.
+    if (state.end == JobEnd::FailedResource) state.failed_hosts.push_back(state.host);
     // Quality numbers, whatever the status (a failed compare still measured its images).
     try {
         if (job.command == "optimize" && !records.empty()) {
@@ -172,6 +189,7 @@ struct RunningJob {
     JobState state;
     std::uintmax_t log_offset;
     std::chrono::steady_clock::time_point start;
+    bool timed_out = false;  ///< SIGTERM sent at the --timeout; SIGKILL follows after the grace
 };
 
 void requeue_this_task() {
@@ -196,6 +214,7 @@ void requeue_this_task() {
 }  // namespace
 
 JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
+    using Clock = std::chrono::steady_clock;
     JobRunOutcome outcome;
     sigset_t waited, previous;
     sigemptyset(&waited);
@@ -203,15 +222,66 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
     sigprocmask(SIG_BLOCK, &waited, &previous);
 
     std::map<pid_t, RunningJob> running;
-    std::size_t next = 0;
+    std::deque<std::size_t> queue(plan.indices.begin(), plan.indices.end());
     const int parallel = std::max(1, plan.parallel);
     const char* array_job = std::getenv("SLURM_ARRAY_JOB_ID");
     const char* array_task = std::getenv("SLURM_ARRAY_TASK_ID");
+    const auto seconds = [](double s) {
+        return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+    };
+
+    // After an attempt's state is written: count it, and queue a resource failure again while
+    // it has tries left (unless starting has stopped: the next run continues it then).
+    const auto account = [&](const BatchJob& job, std::size_t index, const JobState& state) {
+        switch (state.status) {
+            case JobStatus::Done:
+                ++outcome.done;
+                log_info("done {} in {:.1f} s", job.name, state.seconds);
+                return;
+            case JobStatus::Interrupted:
+                ++outcome.interrupted;
+                log_info("interrupted {}: {}", job.name, state.error);
+                if (plan.requeue_interrupted) requeue_this_task();
+                return;
+            default:
+                break;
+        }
+        if (!failed_for_good(state, plan.max_retries)) {
+            if (outcome.stopped || outcome.capped) {
+                ++outcome.not_started;
+                log_warning("failed {} ({}): {}; not retried now, the next run does",
+                            job.name,
+                            job_end_name(state.end),
+                            state.error);
+            } else {
+                ++outcome.retried;
+                queue.push_back(index);
+                log_warning("failed {} ({}, try {} of {}): {}; retrying",
+                            job.name,
+                            job_end_name(state.end),
+                            state.tries,
+                            plan.max_retries + 1,
+                            state.error);
+            }
+            return;
+        }
+        ++outcome.failed;
+        log_warning("failed {} ({}): {}", job.name, job_end_name(state.end), state.error);
+        if (plan.max_failures > 0 && outcome.failed >= plan.max_failures && !outcome.capped) {
+            outcome.capped = true;
+            log_warning(
+                "{} job(s) failed for good (--max-failures {}): starting no new job; the "
+                "next run continues the rest",
+                outcome.failed,
+                plan.max_failures);
+        }
+    };
 
     const auto start_job = [&](std::size_t index) {
         const BatchJob& job = folder.jobs()[index];
         JobState state = folder.read_state(job);
         state.status = JobStatus::Running;
+        state.end = JobEnd::None;
         state.attempts += 1;
         state.host = host_name();
         state.pid = getpid();
@@ -238,22 +308,30 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
         const std::uintmax_t offset = fs::file_size(log, ec);
         folder.write_state(job, state);
         const std::string stdout_path = job.command == "compare" ? state.output + "/compare.json" : log;
+        // The child inherits these (fork): it may name itself in its own files, and the test-only
+        // TDF_TEST_KILL_JOBS (main.cpp) picks its victims by them.
+        setenv("TDF_BATCH_JOB", job.name.c_str(), 1);
+        setenv("TDF_BATCH_ATTEMPT", std::to_string(state.attempts).c_str(), 1);
         try {
             const pid_t pid =
                 spawn_process(argv, folder.working_folder(), stdout_path, log, job.command != "compare");
-            running[pid] = RunningJob{index, state, ec ? 0 : offset, std::chrono::steady_clock::now()};
+            running[pid] = RunningJob{index, state, ec ? 0 : offset, Clock::now()};
+            ++outcome.started;
             log_info("started {} ({} of {}): {}",
                      job.name,
                      outcome.done + outcome.failed + outcome.interrupted + int(running.size()),
                      plan.indices.size(),
                      state.command_line);
         } catch (const Error& e) {
+            // fork or exec failed: the machine's doing (process limit, memory), not the job's.
             state.status = JobStatus::Failed;
+            state.end = JobEnd::FailedResource;
+            state.tries += 1;
+            state.failed_hosts.push_back(state.host);
             state.error = e.what();
             state.finished = utc_timestamp();
             folder.write_state(job, state);
-            ++outcome.failed;
-            log_warning("job {} failed to start: {}", job.name, e.what());
+            account(job, index, state);
         }
     };
 
@@ -265,36 +343,62 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
         const BatchJob& job = folder.jobs()[r.index];
         const int exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
         const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
-        r.state.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.start).count();
+        r.state.seconds = std::chrono::duration<double>(Clock::now() - r.start).count();
         r.state.seconds_total += r.state.seconds;
         r.state.finished = utc_timestamp();
         r.state.pid = 0;
-        collect_job_result(
-            folder, job, exit_code, signal, read_from(folder.log_path(job), r.log_offset), r.state);
+        collect_job_result(folder,
+                           job,
+                           exit_code,
+                           signal,
+                           r.timed_out,
+                           read_from(folder.log_path(job), r.log_offset),
+                           r.state);
         folder.write_state(job, r.state);
-        switch (r.state.status) {
-            case JobStatus::Done:
-                ++outcome.done;
-                log_info("done {} in {:.1f} s", job.name, r.state.seconds);
-                break;
-            case JobStatus::Interrupted:
-                ++outcome.interrupted;
-                log_info("interrupted {}: {}", job.name, r.state.error);
-                if (plan.requeue_interrupted) requeue_this_task();
-                break;
-            default:
-                ++outcome.failed;
-                log_warning("failed {}: {}", job.name, r.state.error);
+        account(job, r.index, r.state);
+    };
+
+    // --timeout: SIGTERM at the limit, SIGKILL after the grace; returns the next such moment.
+    const auto enforce_timeouts = [&]() {
+        Clock::time_point next = Clock::time_point::max();
+        if (plan.timeout_seconds <= 0) return next;
+        const Clock::time_point now = Clock::now();
+        for (auto& [pid, r] : running) {
+            const Clock::time_point term = r.start + seconds(plan.timeout_seconds);
+            const Clock::time_point kill_at = term + seconds(kTimeoutGraceSeconds);
+            if (!r.timed_out && now >= term) {
+                r.timed_out = true;
+                log_warning("{} ran past --timeout {:.0f} s: SIGTERM",
+                            folder.jobs()[r.index].name,
+                            plan.timeout_seconds);
+                kill(-pid, SIGTERM);
+            }
+            if (r.timed_out && now >= kill_at) kill(-pid, SIGKILL);
+            next = std::min(next, r.timed_out ? kill_at : term);
         }
+        return next;
     };
 
     while (true) {
-        while (!outcome.stopped && running.size() < std::size_t(parallel) && next < plan.indices.size())
-            start_job(plan.indices[next++]);
+        while (!outcome.stopped && !outcome.capped && running.size() < std::size_t(parallel) &&
+               !queue.empty()) {
+            const std::size_t index = queue.front();
+            queue.pop_front();
+            start_job(index);
+        }
         if (running.empty()) break;
+        const Clock::time_point next = enforce_timeouts();
         siginfo_t info;
-        const int s = sigwaitinfo(&waited, &info);
-        if (s < 0) continue;  // EINTR
+        int s;
+        if (next == Clock::time_point::max()) {
+            s = sigwaitinfo(&waited, &info);
+        } else {
+            const auto wait = std::max(Clock::duration::zero(), next - Clock::now());
+            const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count() + 1000000;
+            const timespec limit{time_t(ns / 1000000000), long(ns % 1000000000)};
+            s = sigtimedwait(&waited, &info, &limit);
+        }
+        if (s < 0) continue;  // EINTR, or a timeout came due (enforced above)
         if (s == SIGCHLD) {
             int status = 0;
             pid_t pid;
@@ -308,7 +412,7 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
             for (const auto& [pid, r] : running) kill(-pid, SIGTERM);
         }
     }
-    outcome.not_started = int(plan.indices.size() - next);
+    outcome.not_started += int(queue.size());
     sigprocmask(SIG_SETMASK, &previous, nullptr);
     return outcome;
 }

@@ -3,6 +3,8 @@
 #include <tdf/core/error.h>
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <map>
 #include <set>
 
@@ -24,6 +26,38 @@ void validate_job(const BatchJob& job, const std::string& where) {
                     job.name,
                     job.command);
     if (job.args.empty()) throw_error("{}: job '{}' has no arguments", where, job.name);
+    // optimize and render take scene overrides: one that does not parse would fail the job only
+    // once it runs, after the batch had started.
+    if (job.command == "optimize" || job.command == "render") {
+        for (const std::string& a : job.args) {
+            if (a.empty() || a.front() == '-' || a.find('=') == std::string::npos) continue;
+            Json scratch = Json::object();
+            try {
+                apply_override(scratch, a);
+            } catch (const Error& e) {
+                throw_error("{}: job '{}': {}", where, job.name, e.what());
+            }
+        }
+    }
+}
+
+bool has_input_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    static const std::set<std::string> kInputs = {".json",
+                                                  ".obj",
+                                                  ".gltf",
+                                                  ".glb",
+                                                  ".ply",
+                                                  ".exr",
+                                                  ".png",
+                                                  ".jpg",
+                                                  ".jpeg",
+                                                  ".hdr",
+                                                  ".tif",
+                                                  ".tiff",
+                                                  ".npz"};
+    return kInputs.count(ext) > 0;
 }
 
 std::string quote_argument(const std::string& a) {
@@ -126,6 +160,7 @@ std::vector<BatchJob> parse_csv_manifest(const std::string& text, const std::str
         job.command = fields[column["command"]];
         job.args = split_arguments(fields[column["args"]], where);
         if (column.count("output")) job.output = fields[column["output"]];
+        job.where = where;
         validate_job(job, where);
         jobs.push_back(job);
     }
@@ -171,6 +206,7 @@ std::vector<BatchJob> parse_jsonl_manifest(const std::string& text, const std::s
         } else {
             throw_error("{}: \"args\" must be an array of strings or one string", where);
         }
+        job.where = where;
         validate_job(job, where);
         jobs.push_back(job);
     }
@@ -178,6 +214,28 @@ std::vector<BatchJob> parse_jsonl_manifest(const std::string& text, const std::s
 }
 
 }  // namespace
+
+void check_job_inputs(const std::vector<BatchJob>& jobs, const std::string& working_folder) {
+    namespace fs = std::filesystem;
+    for (const BatchJob& job : jobs) {
+        for (std::size_t k = 0; k < job.args.size(); ++k) {
+            const std::string& a = job.args[k];
+            if (a.empty() || a.front() == '-' || a.find("{out}") != std::string::npos) continue;
+            if (k > 0 && (job.args[k - 1] == "-o" || job.args[k - 1] == "--output")) continue;
+            const auto eq = a.find('=');
+            const std::string path = eq == std::string::npos ? a : a.substr(eq + 1);
+            if (!has_input_extension(path) || (eq != std::string::npos && !fs::path(path).is_absolute()))
+                continue;
+            std::error_code ec;
+            if (!fs::exists(fs::path(working_folder) / path, ec))
+                throw_error("{}: job '{}': input file '{}' does not exist{}",
+                            job.where,
+                            job.name,
+                            path,
+                            fs::path(path).is_absolute() ? "" : " (relative to " + working_folder + ")");
+        }
+    }
+}
 
 Json BatchJob::to_json() const {
     Json json = {{"name", name}, {"command", command}, {"args", args}};
@@ -235,9 +293,12 @@ std::vector<BatchJob> parse_manifest(const std::string& text, const std::string&
     std::vector<BatchJob> jobs = text[first] == '{' || text[first] == '#' ? parse_jsonl_manifest(text, source)
                                                                           : parse_csv_manifest(text, source);
     if (jobs.empty()) throw_error("{}: the manifest lists no jobs", source);
-    std::set<std::string> names;
-    for (const BatchJob& job : jobs)
-        if (!names.insert(job.name).second) throw_error("{}: job name '{}' appears twice", source, job.name);
+    std::map<std::string, std::string> first_row;
+    for (const BatchJob& job : jobs) {
+        const auto [it, fresh] = first_row.emplace(job.name, job.where);
+        if (!fresh)
+            throw_error("{}: job name '{}' appears twice (first at {})", job.where, job.name, it->second);
+    }
     return jobs;
 }
 

@@ -51,8 +51,11 @@ if [ "$engine" = slurm ]; then
   [ $rc = 0 ] || fail "could not start the test Slurm"
   trap 'bash "$src/tests/batch/slurm_cluster.sh" stop "$daemons"' EXIT
   eval "$env_line"
-  "$tdf" batch run manifest.csv -o b --engine slurm --cpus-per-task 1 --max-parallel 2 --signal-seconds 60 \
-    --wait > run1.out 2> run1.err &
+  # --max-array-size 3: two arrays (jobs 0-2, then 3-4 as task ids 0-1). render_views kills itself
+  # on its first attempt (test-only TDF_TEST_KILL_JOBS, passed to the tasks by sbatch): failed-resource,
+  # so the finish job submits a retry round, which --wait follows.
+  TDF_TEST_KILL_JOBS=render_views "$tdf" batch run manifest.csv -o b --engine slurm --cpus-per-task 1 \
+    --max-parallel 2 --signal-seconds 60 --max-array-size 3 --wait > run1.out 2> run1.err &
 else
   # One job at a time: opt_small, then opt_long, which the SIGTERM below stops; the rest never start.
   "$tdf" --threads 2 batch run manifest.csv -o b --jobs 1 > run1.out 2> run1.err &
@@ -61,7 +64,8 @@ runner=$!
 
 # Stop opt_long once it has written its first checkpoint (iteration 5 of 200).
 wait_for 300 "opt_long's first checkpoint" test -s b/jobs/opt_long/checkpoint.bin
-wait_for 30 "opt_long running" test "$(state b/state/opt_long.json status)" = running
+opt_long_running() { [ "$(state b/state/opt_long.json status)" = running ]; }
+wait_for 30 "opt_long running" opt_long_running
 if [ "$engine" = slurm ]; then
   task=$(state b/state/opt_long.json slurm_job)
   [ -n "$task" ] || fail "no Slurm task id in opt_long's state"
@@ -70,13 +74,21 @@ if [ "$engine" = slurm ]; then
   # itself: bound it; the requeue below is what counts.
   timeout 10 scancel --batch --signal=TERM "$task" 2>/dev/null || true
   # The runner requeues the task; Slurm holds a requeued job ~2 minutes (BeginTime): release it now.
-  wait_for 120 "opt_long requeued" test "$(squeue -h -j "$task" -o %T 2>/dev/null)" = PENDING
+  # (A function, so that squeue is asked again on every poll, not once when wait_for is called.)
+  requeued() { [ "$(squeue -h -j "$task" -o %T 2>/dev/null)" = PENDING ]; }
+  wait_for 120 "opt_long requeued" requeued
   scontrol update JobId="$task" StartTime=now
   set +e; wait $runner; rc=$?; set -e
   [ $rc = 2 ] || { cat run1.err; fail "tdf batch run --engine slurm --wait: exit $rc, expected 2 (one job failed)"; }
   ls b/logs/slurm-*_1.out > /dev/null || fail "no per-task Slurm log"
   ls b/logs/slurm-summary-*.out > /dev/null || fail "the summary job did not run"
   grep -q "requeued Slurm task" b/logs/slurm-*_1.out || fail "the interrupted task was not requeued"
+  test -s b/slurm/array_1.sh || fail "5 jobs with --max-array-size 3 were not split into two arrays"
+  grep -q '"$((3 + SLURM_ARRAY_TASK_ID))"' b/slurm/array_1.sh || fail "the second array does not offset its task ids"
+  [ "$(grep -c '' b/slurm/submissions.jsonl)" = 2 ] || fail "expected the first submission and one retry round"
+  [ "$(state b/state/render_views.json attempts)" = 2 ] || fail "render_views should have been retried once"
+  [ "$(state b/state/render_views.json class)" = done ] || fail "render_views is not done after its retry"
+  [ "$(state b/state/broken.json attempts)" = 1 ] || fail "the bad input was retried"
 else
   kill -TERM $runner   # the batch passes SIGTERM to its running jobs and starts no new one
   set +e; wait $runner; rc=$?; set -e

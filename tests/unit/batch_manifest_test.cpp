@@ -70,7 +70,7 @@ TEST(BatchManifest, BadManifestsAreOneLineErrorsWithTheLine) {
               std::string::npos);
     EXPECT_NE(error_of([] {
                   parse_manifest("name,command,args\na,render,x\na,render,y\n", "m.csv");
-              }).find("'a' appears twice"),
+              }).find("m.csv:3: job name 'a' appears twice (first at m.csv:2)"),
               std::string::npos);
     EXPECT_NE(error_of([] {
                   parse_manifest("{\"name\":\"a\",\"command\":\"render\"}\n", "m.jsonl");
@@ -82,6 +82,36 @@ TEST(BatchManifest, BadManifestsAreOneLineErrorsWithTheLine) {
               }).find("unknown key 'gpu'"),
               std::string::npos);
     EXPECT_NE(error_of([] { split_arguments("a 'b", "here"); }).find("here: unclosed '"), std::string::npos);
+    EXPECT_EQ(error_of([] { parse_manifest("name,command,args\na,render,s.json =3\n", "m.csv"); }),
+              "m.csv:2: job 'a': override '=3' is not of the form key=value");
+    EXPECT_EQ(error_of([] { parse_manifest("name,command,args\na,optimize,s.json seed..x=3\n", "m.csv"); }),
+              "m.csv:2: job 'a': override 'seed..x=3' has an empty key component");
+    // Only optimize and render take overrides.
+    EXPECT_EQ(error_of([] { parse_manifest("name,command,args\na,tactile,convert =3\n", "m.csv"); }),
+              "(no error)");
+}
+
+TEST(BatchManifest, MissingInputFilesNameTheRow) {
+    const std::string dir = test::scratch_dir() + "/batch_manifest_inputs";
+    fs::create_directories(dir);
+    write_text_atomically(dir + "/s.json", "{}");
+    const auto ok = parse_manifest(
+        "name,command,args\n"
+        "a,render,s.json image.width=8 -o views/x.png\n"
+        "b,tactile,convert s.json -o {out}/n.png\n",
+        "m.csv");
+    EXPECT_NO_THROW(check_job_inputs(ok, dir));  // outputs (after -o, or with {out}) are not inputs
+    const auto missing = parse_manifest(
+        "name,command,args\n"
+        "a,render,s.json\n"
+        "b,compare,s.json gone.exr\n",
+        "m.csv");
+    EXPECT_EQ(error_of([&] { check_job_inputs(missing, dir); }),
+              "m.csv:3: job 'b': input file 'gone.exr' does not exist (relative to " + dir + ")");
+    const auto absolute =
+        parse_manifest("name,command,args\na,optimize,s.json mesh=/no/such/mesh.obj\n", "m.csv");
+    EXPECT_EQ(error_of([&] { check_job_inputs(absolute, dir); }),
+              "m.csv:2: job 'a': input file '/no/such/mesh.obj' does not exist");
 }
 
 TEST(BatchManifest, ChangesAreNamed) {

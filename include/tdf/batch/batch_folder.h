@@ -24,16 +24,34 @@ enum class JobStatus { Pending, Running, Done, Failed, Interrupted };
 
 const char* job_status_name(JobStatus status);
 
+/// How a job's last attempt ended (state key "class"; docs/commands/batch.md "Failure classes"):
+/// done; failed-input: deterministic (tdf exit 1, a bad mesh or scene, or any exit code not
+/// listed below), never retried; failed-resource: out of memory (exit kExitOutOfMemory or
+/// SIGKILL), the --timeout, a signal other than the stop signals, an unexpected error (exit
+/// kExitUnexpected: a system error or a bug), a runner or node that died: retried up to --max-retries
+/// times; preempted: stopped by SIGTERM/SIGINT/SIGUSR1 or exit kExitInterrupted (requeued or
+/// continued by the next run, not counted as a try). None while pending or running.
+enum class JobEnd { None, Done, FailedInput, FailedResource, Preempted };
+
+const char* job_end_name(JobEnd end);
+
+/// The class of a process end that is not a success: `timed_out` when the runner stopped it at
+/// its --timeout.
+JobEnd classify_job_end(int exit_code, int signal, bool timed_out);
+
 struct JobState {
     JobStatus status = JobStatus::Pending;
+    JobEnd end = JobEnd::None;      ///< how the last attempt ended (key "class")
     int exit_code = -1;             ///< the tdf process's exit code, -1 when none
     int signal = 0;                 ///< terminating signal, 0 when none
     std::string error;              ///< the error line (last "tdf ..." line of the log) for failed jobs
     int attempts = 0;               ///< starts, including requeues and resumed runs
+    int tries = 0;                  ///< attempts that ended done or failed (preempted ones do not count)
     double seconds = 0;             ///< wall time of the last attempt
     double seconds_total = 0;       ///< wall time of all attempts
     std::string started, finished;  ///< UTC ISO 8601
     std::string host;
+    std::vector<std::string> failed_hosts;  ///< the host of each failed-resource try
     int pid = 0;               ///< the runner's pid while running
     std::string slurm_job;     ///< "<array job>_<task>" under Slurm
     std::string command_line;  ///< the tdf command of the last attempt

@@ -14,6 +14,7 @@ constexpr int kBatchExitUnfinished = 3;  ///< none failed, but some are pending,
 
 struct BatchTotals {
     int pending = 0, running = 0, done = 0, failed = 0, interrupted = 0;
+    int failed_input = 0, failed_resource = 0;  ///< the failed ones by class
     int total() const { return pending + running + done + failed + interrupted; }
     /// kBatchExitAllDone, kBatchExitFailed or kBatchExitUnfinished.
     int exit_code() const;
@@ -22,7 +23,8 @@ struct BatchTotals {
 BatchTotals batch_totals(const BatchFolder& folder);
 
 /// Everything a report page needs: {"batch", "written", "totals": {...}, "jobs": [{"job",
-/// "command", "status", "exit_code", "error", "attempts", "seconds", "seconds_total", "started",
+/// "command", "status", "class", "exit_code", "signal", "error", "attempts", "tries", "seconds",
+/// "seconds_total", "started",
 /// "finished", "host", "slurm_job", "output", "log", "thumbnail", "quality": {...}}]}. Paths
 /// inside the batch folder are relative to it.
 Json batch_summary_json(const BatchFolder& folder);
@@ -31,8 +33,8 @@ Json batch_summary_json(const BatchFolder& folder);
 /// `quality.<key>`, the union over the jobs) into the batch folder, atomically.
 void write_batch_summary(const BatchFolder& folder);
 
-/// The table `tdf batch status` prints: one line per job (status, seconds, attempts, error line)
-/// and the totals.
+/// The table `tdf batch status` prints: one line per job (status, class, seconds, attempts,
+/// tries, error line) and the totals, the failed ones by class.
 std::string batch_status_table(const BatchFolder& folder);
 
 }  // namespace tdf

@@ -29,6 +29,7 @@ struct BatchJob {
     std::string command;            ///< optimize | render | compare | tactile | atlas
     std::vector<std::string> args;  ///< arguments after the subcommand
     std::string output;             ///< as written; "" = jobs/<name>
+    std::string where;              ///< "manifest:line" of its row, for messages (not compared)
 
     Json to_json() const;
     bool operator==(const BatchJob& other) const;
@@ -38,11 +39,19 @@ struct BatchJob {
 const std::vector<std::string>& batch_commands();
 
 /// Reads a manifest file (format detected from its first non-blank character). Throws
-/// tdf::Error with `path:line: problem` on any error, including an empty manifest.
+/// tdf::Error with `path:line: problem` on any error, including an empty manifest, a duplicate
+/// name, or an optimize/render `key=value` override that does not parse.
 std::vector<BatchJob> read_manifest(const std::string& path);
 
 /// Parses manifest text; `source` names it in messages.
 std::vector<BatchJob> parse_manifest(const std::string& text, const std::string& source);
+
+/// Throws tdf::Error (`path:line: job 'a': input file 'x.obj' does not exist`) for the first
+/// job naming an input that is not there: an argument with an input file's extension (.json,
+/// .obj, .gltf, .glb, .ply, .exr, .png, .jpg, .jpeg, .hdr, .tif, .tiff, .npz), relative to
+/// `working_folder`, that is not an output (after -o/--output, or containing {out}); and absolute
+/// such paths in `key=value` overrides (relative ones resolve against the scene's folder).
+void check_job_inputs(const std::vector<BatchJob>& jobs, const std::string& working_folder);
 
 /// Splits a shell-like argument string: whitespace separates, '...' and "..." group (no escapes
 /// inside single quotes; \" and \\ inside double quotes). Throws on an unclosed quote.
