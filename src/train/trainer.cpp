@@ -1231,8 +1231,18 @@ QualityReport Trainer::evaluate_held_out() const {
             alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
             // Without the input's own detail (prints, label edges), which must stay and would
             // otherwise dominate the measure on a printed asset.
+            // Against the relief's own curvature, as relief_shading computes it: the view normals
+            // minus the surface's, so the mesh's curvature (large near a silhouette) is not taken
+            // for relief.
+            Image relief = learned.view_normals;
+            const ViewRotation rot = view_rotation(camera);
+            for (std::size_t p = 0; p < g.pixel_count(); ++p) {
+                if (g.mask[p] <= 0.0f) continue;
+                const Vec3f surface = view_space_normal(rot, g.normal[p]);
+                for (int c = 0; c < 3; ++c) relief.data()[3 * p + std::size_t(c)] -= surface[c];
+            }
             added_alignment +=
-                colour_geometry_correlation(learned_images(camera, g, added).albedo, learned.view_normals, learned.mask);
+                colour_geometry_correlation(learned_images(camera, g, added).albedo, relief, learned.mask);
         }
         seams.albedo.add(g, learned.albedo, mesh_seams);
         seams.input_albedo.add(g, input.albedo, mesh_seams);

@@ -173,7 +173,7 @@ TEST(ColourRefinement, TheTrainingLightDoesNotReachTheAlbedo) {
     // Stated tolerance, over the covered texels of the two final albedo maps: PSNR >= 45 dB, the
     // 99.9th percentile of the per-channel differences <= 0.03, none above 0.1 (at 256^2 a texel
     // on the edge of a printed letter straddles red and white, and there the views' footprints
-    // weigh its neighbours by their shade: measured 0.076 at one such texel). The additive relief
+    // weigh its neighbours by their shade: measured 0.061 at one such texel). The additive relief
     // of the earlier backend, learned as detail / shade, failed it on this scene: 44.8 dB, 99.9th
     // percentile 0.055, max 0.27 (a dark-glass texel, input 0.05 0.10 0.06, came out 0.36 red
     // under one light and 0.63 under the other).

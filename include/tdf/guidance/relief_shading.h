@@ -42,7 +42,7 @@ public:
         /// at normalised curvature +-1 and full denoising (gain 1 +- contrast), [0, 1]; 0 = off
         /// (the refinement then keeps the input's colour). Scenes set it as
         /// guidance.relief_shading.contrast.
-        float contrast = 0.35f;
+        float contrast = 0.25f;
         /// "detail_sigma": scale separating the local mean colour from detail, pixels (> 0).
         float detail_sigma = 3.0f;
         /// "curvature_sigma": Gaussian smoothing of the normals before differentiation, pixels.

@@ -75,9 +75,10 @@ struct QualityReport {
     /// Colour-geometry alignment of the learned albedo and normals (colour_geometry_correlation,
     /// mean over the held-out views): what visual guidance raises (issue 6).
     double colour_geometry_correlation = 0;
-    /// The same measure on what the run added (learned minus input albedo, issue 29): whether the
-    /// colour the refinement put in follows the relief, whatever prints the input carries. 0 when
-    /// nothing was added.
+    /// The same measure on what the run added (learned minus input albedo, issue 29) against the
+    /// relief's own curvature (view normals minus the surface's, as relief_shading takes it):
+    /// whether the colour the refinement put in follows the relief, whatever prints the input
+    /// carries and however curved the mesh is. 0 when nothing was added.
     double added_colour_geometry_correlation = 0;
     /// How exemplar-like the learned relief is, whatever its position (what tactile guidance
     /// lowers, issue 6): L1 distance between the tilt histograms (relief_statistics.h) of the
