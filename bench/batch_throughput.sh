@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Throughput of `tdf batch` (README "tdf batch", Measured):
+# Throughput of `tdf batch` (docs/measurements.md, "`tdf batch` throughput"):
 #   bench/batch_throughput.sh local   16 small optimize runs: one after the other with every
 #                                     thread, then `tdf batch run` (local engine, default share)
 #   bench/batch_throughput.sh slurm   the overhead per Slurm task: 16 tiny compare jobs through

@@ -43,7 +43,7 @@ for t in "${TARGETS[@]}"; do
   dict=()
   [ -f "tests/fuzz/dict/$t.dict" ] && dict=(-dict="tests/fuzz/dict/$t.dict")
   log=$BUILD/fuzz_$t.log
-  # Image inputs may legally decode to 4096 bytes per file byte (README "Limits"), so long
+  # Image inputs may legally decode to 4096 bytes per file byte (docs/robustness.md "Limits"), so long
   # image inputs spend their time in memset; 2 KB inputs (up to 8 MB decoded) keep the
   # harness fast. Other readers take up to 64 KB.
   max_len=65536

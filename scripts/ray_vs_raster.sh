@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Ray vs raster on every shipped scene (README "Ray vs raster"): renders each scene with the ray
+# Ray vs raster on every shipped scene (docs/commands/render.md "Ray vs raster"): renders each scene with the ray
 # producer and the raster producer, each without and with dr.antialias, and compares the folders
 # with `tdf compare --json`, whole images and with the mask eroded by 1 and 2 pixels. Prints one
 # markdown row per scene, pass and comparison (PSNR, max error, percent of pixels over 0.004).

@@ -26,7 +26,7 @@ if [ "${TDF_SKIP_SANITIZE:-0}" != 1 ]; then
   # 462 s sanitized; the same code runs sanitized in the smaller Pipeline and Quilting tests).
   # Warnings are not errors here (the Release build above is the warning gate): with the
   # sanitizers' instrumentation g++ 12 reports false -Wmaybe-uninitialized inside <regex>.
-  # Cost: README "Robustness".
+  # Cost: docs/measurements.md "Cost of the ASan + UBSan job".
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g1" \
     -DTDF_SANITIZE=ON -DTDF_BUILD_BENCH=OFF -DTDF_WERROR=OFF -DCGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE=TRUE "${LAUNCHER[@]}" >/dev/null
   cmake --build build-asan -j"$JOBS"
@@ -37,6 +37,6 @@ fi
 
 if [ "${TDF_SKIP_FUZZ:-0}" != 1 ]; then
   # Every reader's libFuzzer harness (clang, ASan + UBSan) for a short bounded time; any crash,
-  # leak, sanitizer report, timeout or out-of-memory fails CI (README "Robustness").
+  # leak, sanitizer report, timeout or out-of-memory fails CI (docs/robustness.md).
   TDF_FUZZ_SECONDS=${TDF_FUZZ_SECONDS:-20} TDF_JOBS="$JOBS" bash scripts/fuzz.sh
 fi

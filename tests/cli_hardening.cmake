@@ -1,4 +1,4 @@
-# End-to-end checks of the hardening items (README "Errors", "Limits"): usage errors, help,
+# End-to-end checks of the hardening items (docs/robustness.md "Errors", "Limits"): usage errors, help,
 # non-finite options, bounded sizes, output names that must match their format.
 add_test(NAME HardeningCli.UsageHelpAndLimits
          COMMAND ${CMAKE_COMMAND} -DTDF=$<TARGET_FILE:tdf> -DSOURCE_DIR=${PROJECT_SOURCE_DIR}

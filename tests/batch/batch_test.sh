@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# End-to-end `tdf batch` with the real tdf on tiny jobs (README "tdf batch"):
+# End-to-end `tdf batch` with the real tdf on tiny jobs (docs/commands/batch.md):
 #   batch_test.sh local TDF SOURCE_DIR WORK_DIR   the local engine, no Slurm needed
 #   batch_test.sh slurm TDF SOURCE_DIR WORK_DIR   a throw-away single-node Slurm (tests/batch/slurm_cluster.sh)
 # Five jobs: two optimize runs (one long enough to be stopped with SIGTERM, which must checkpoint

@@ -19,7 +19,7 @@ check(0 "" "--patch-size" ${TDF} help tactile patch)
 check(1 "^tdf help: .*no command 'nosuch'" "" ${TDF} help nosuch)
 check(1 "^tdf help: 'tdf tactile' has no command 'bogus'" "" ${TDF} help tactile bogus)
 
-# Usage errors: one line naming the command, exit 1 (README "Errors"), not CLI11's 105-109.
+# Usage errors: one line naming the command, exit 1 (docs/robustness.md "Errors"), not CLI11's 105-109.
 check(1 "^tdf render: .*--bogus" "" ${TDF} render ${_scene} -o ${OUT_DIR}/x --bogus)
 check(1 "^tdf render: .*required" "" ${TDF} render)
 # --strength also accepts "auto" (issue 11): its own check names the option on one line.
