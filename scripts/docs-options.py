@@ -79,7 +79,7 @@ def block(command, text):
     sec = sections(text)
     lines = [BEGIN.format(' '.join(command)).replace('help  (', 'help (')]
     title = 'tdf ' + ' '.join(command) if command else 'tdf (global options)'
-    lines += ['', f'Options of `{title}`, as `tdf help {" ".join(command)}`'.rstrip() + ' prints them:', '']
+    lines += ['', f'### {title}', '', f'As `tdf help {" ".join(command)}`'.rstrip() + ' prints them:', '']
     lines += ['| option | value | default | meaning |', '|---|---|---|---|']
     for left, meaning in sec.get('Options', []):
         names, spec, default = split_option(left)
