@@ -40,7 +40,7 @@ int run_parts(const PartsCommandOptions& o) {
     namespace fs = std::filesystem;
     const SceneDescription description = load_scene(o.scene_path, o.overrides);
     if (!description.parts.enabled())
-        throw_error("{}: the scene has no 'parts' section (README \"Multi-part textures\")", o.scene_path);
+        throw_error("{}: the scene has no 'parts' section (docs/multi-part-textures.md)", o.scene_path);
     const std::string name =
         o.name.empty() ? fs::absolute(o.scene_path).parent_path().filename().string() : o.name;
     ensure_folder(o.output_dir);

@@ -112,7 +112,7 @@ Command register_render(CLI::App& root) {
     Command command;
     CLI::App* app = root.add_subcommand(
         "render", "render the passes of a scene file's views to multi-layer EXRs (view_000.exr, ...)");
-    app->add_option("scene", options->scene, "scene file (JSON, README \"Scene file format\")")->required();
+    app->add_option("scene", options->scene, "scene file (JSON, docs/scene-format.md)")->required();
     app->add_option(
         "overrides", options->overrides, "scene overrides key=value (dotted keys, e.g. image.width=256)");
     app->add_option("-o,--output", options->output, "output folder")->required();

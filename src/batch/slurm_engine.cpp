@@ -180,7 +180,7 @@ std::string slurm_array_script(const BatchFolder& folder, const std::vector<std:
     const std::string name = "tdf-" + fs::path(folder.root()).filename().string();
     std::string s = "#!/bin/bash\n";
     s += "# tdf batch: one array task per job of " + folder.root() +
-         "/manifest.jsonl (README \"tdf batch\").\n";
+         "/manifest.jsonl (docs/commands/batch.md).\n";
     s += "#SBATCH --job-name=" + name + "\n";
     s += "#SBATCH --array=" + slurm_array_spec(indices, options.max_parallel) + "\n";
     s += "#SBATCH --cpus-per-task=" + std::to_string(options.cpus_per_task) + "\n";
