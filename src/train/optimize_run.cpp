@@ -123,12 +123,12 @@ std::unique_ptr<GuidanceBackend> make_backend(const std::string& name, const Run
     return backend;
 }
 
-// Texture-space fidelity of the learned maps against the targets laid over the atlas (issue 10's
-// goals 1 and 2), over the covered texels; null for pixel evaluation.
-Json texture_space_quality(const Trainer& trainer) {
+// Texture-space fidelity of the maps as just exported (`maps`, not exported again) against the
+// targets laid over the atlas (issue 10's goals 1 and 2), over the covered texels; null for
+// pixel evaluation.
+Json texture_space_quality(const Trainer& trainer, const BakedMaps& maps) {
     const TexelAtlas* atlas = trainer.texel_atlas();
     if (!atlas) return Json();
-    const BakedMaps maps = trainer.export_maps();
     std::vector<std::uint8_t> covered(atlas->texel_count(), 0);
     for (std::uint32_t t : atlas->texels) covered[t] = 1;
     Json quality = measure_texture_fidelity(maps.albedo, trainer.albedo_target(), maps.tactile_normal,
@@ -374,7 +374,7 @@ void run_optimize(const OptimizeOptions& options) {
             // The issue's quality measure is taken here, after the matching phase.
             const QualityReport matched = trainer.evaluate_held_out();
             Json initialized = {{"quality", matched.to_json()}, {"iteration", done}};
-            if (const Json texture = texture_space_quality(trainer); !texture.is_null())
+            if (const Json texture = texture_space_quality(trainer, matched_maps); !texture.is_null())
                 initialized["texture_space"] = texture;
             write_text_atomically(base + "_initialized_report.json", initialized.dump(2) + "\n");
             if (parts) boundary_after_matching = boundary_json(matched_maps);
@@ -403,7 +403,7 @@ void run_optimize(const OptimizeOptions& options) {
                          {"seconds_total", progress.elapsed_seconds()},
                          {"seed", description.seed},
                          {"threads", ThreadLimit::current()}};
-    if (const Json texture = texture_space_quality(trainer); !texture.is_null()) {
+    if (const Json texture = texture_space_quality(trainer, maps); !texture.is_null()) {
         report["texture_space"] = texture;
         report["colour"] = colour_check(trainer, maps.albedo, matched_albedo, base, quality, texture);
     }

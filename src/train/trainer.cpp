@@ -1214,7 +1214,7 @@ QualityReport Trainer::evaluate_held_out() const {
                 const float lod = m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]);
                 m_tactile_target_texture.taps(g.uv[p], lod, -1, taps);
                 input.normal = safe_normalize(gather3(m_tactile_target_texture, taps));
-                m_albedo_target_texture.taps(g.uv[p], lod, -1, taps);
+                m_albedo_target_texture.taps(g.uv[p], lod, -1, taps);  // both targets: the atlas's size
                 added[q].albedo = outputs[q].albedo - gather3(m_albedo_target_texture, taps);
             }
             const Vec3f e = outputs[q++].albedo - input.albedo;
@@ -1229,11 +1229,10 @@ QualityReport Trainer::evaluate_held_out() const {
         const LearnedImages input = learned_images(camera, g, inputs);
         if (scored) {
             alignment += colour_geometry_correlation(learned.albedo, learned.view_normals, learned.mask);
-            // Without the input's own detail (prints, label edges), which must stay and would
-            // otherwise dominate the measure on a printed asset.
-            // Against the relief's own curvature, as relief_shading computes it: the view normals
-            // minus the surface's, so the mesh's curvature (large near a silhouette) is not taken
-            // for relief.
+            // What the run added, without the input's own detail (prints, label edges, which
+            // must stay and would dominate the measure on a printed asset), against the relief's
+            // own curvature as relief_shading takes it: the view normals minus the surface's, so
+            // the mesh's curvature (large near a silhouette) is not taken for relief.
             Image relief = learned.view_normals;
             const ViewRotation rot = view_rotation(camera);
             for (std::size_t p = 0; p < g.pixel_count(); ++p) {
