@@ -7,7 +7,7 @@
 // refine/<n>_parts: one refinement iteration of the texture-space optimizer on two_part_sphere at
 // 512^2 (`tdf optimize` defaults otherwise: cameras, visual relief_shading guidance, tactile
 // exemplar_patch_match guidance) with 1 part (the scene without `parts`), the scene's 2 parts,
-// and 4 parts (tests/common/four_part_sphere.h); each part has its own tactile backend with its
+// and 4 and 8 parts (bands, tests/common/four_part_sphere.h); each part has its own tactile backend with its
 // own map as exemplar, gated by its mask. The 20 matching iterations and one refinement
 // iteration run before the timing.
 // CPU time of the process is reported (the machine is shared); wall time is noisy.
@@ -84,7 +84,12 @@ std::shared_ptr<Refinement> refinement(const std::string& scene, int parts) {
     auto r = std::make_shared<Refinement>();
     const SceneDescription two = load_scene(scene);
     r->assets = load_scene_assets(two);
-    r->description = parts == 4 ? test::four_part_sphere(two, r->assets->mesh, (std::filesystem::temp_directory_path() / "tdf_four_part_sphere_labels.txt").string()) : two;
+    r->description = parts > 2 ? test::banded_sphere(two, r->assets->mesh,
+                                                     (std::filesystem::temp_directory_path() /
+                                                      ("tdf_banded_sphere_labels_" + std::to_string(parts) + ".txt"))
+                                                         .string(),
+                                                     parts)
+                               : two;
     const RunConfig config = RunConfig::from_json(Json{{"iterations", 40}, {"init_iterations", 20}}, Json(),
                                                   Json{{"texture_size", 512}}, Json(), scene);
     r->target.mesh = &r->assets->mesh;
@@ -167,7 +172,7 @@ int main(int argc, char** argv) {
                 ->MeasureProcessCPUTime()
                 ->Iterations(1);
         }
-        for (int n : {1, 2, 4})
+        for (int n : {1, 2, 4, 8})
             benchmark::RegisterBenchmark(("refine/" + std::to_string(n) + "_parts").c_str(),
                                          [two, n](benchmark::State& state) {
                                              const auto r = refinement(two + "/scene.json", n);

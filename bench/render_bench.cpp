@@ -3,7 +3,7 @@
 // AVX-512, 8-wide otherwise, chosen at run time). Scene: a 100k-triangle UV sphere with a 1024^2
 // albedo and tactile map, seen from radius 2.5 (about 72% of the rays hit). The ray and raster
 // producers and their full renders run on the same scene and camera in one run, plus the
-// pieces of the floor: the G-buffer alone, and the two trilinear lookups per hit pixel alone.
+// parts of the frame: the G-buffer alone, and the two trilinear lookups per hit pixel alone.
 // `bench/run.sh` prints every benchmark's ratio to BM_Baseline_EmbreePackets.
 #include <benchmark/benchmark.h>
 #include <tdf/core/parallel.h>
@@ -115,9 +115,9 @@ void BM_Raster_GBuffer(benchmark::State& state) {
     set_rays(state);
 }
 
-// The floor of the texture work: the albedo and tactile trilinear lookups of every hit pixel
+// The texture work alone: the albedo and tactile trilinear lookups of every hit pixel
 // of a precomputed G-buffer (same tiles and threads as the renderer), nothing else.
-void BM_Floor_TwoTrilinearLookups(benchmark::State& state) {
+void BM_Part_TwoTrilinearLookups(benchmark::State& state) {
     const BenchScene& s = BenchScene::get();
     ThreadLimit limit(int(state.range(0)));
     const GBuffer g = trace_gbuffer(s.scene, s.mesh, s.camera);
@@ -190,7 +190,7 @@ TDF_RENDER_BENCH(BM_EmbreeSingleRays);
 TDF_RENDER_BENCH(BM_GBuffer);
 TDF_RENDER_BENCH(BM_Raster_Visibility);
 TDF_RENDER_BENCH(BM_Raster_GBuffer);
-TDF_RENDER_BENCH(BM_Floor_TwoTrilinearLookups);
+TDF_RENDER_BENCH(BM_Part_TwoTrilinearLookups);
 TDF_RENDER_BENCH(BM_Render_Training);
 TDF_RENDER_BENCH(BM_Render_Visualizer);
 TDF_RENDER_BENCH(BM_Render_LambertianOnly);

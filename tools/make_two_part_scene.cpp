@@ -9,6 +9,7 @@
 #include <tdf/atlas/gutter.h>
 #include <tdf/atlas/uv_raster.h>
 #include "generator_main.h"
+#include "part_scene.h"
 
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
@@ -40,32 +41,10 @@ const char* const kFiles[] = {
 std::vector<int> face_parts(const TriangleMesh& mesh) {
     std::vector<int> part(mesh.triangles.size());
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-        const Vec3i& t = mesh.triangles[f];
-        const Vec3f c = (mesh.positions[std::size_t(t.x)] + mesh.positions[std::size_t(t.y)] +
-                         mesh.positions[std::size_t(t.z)]) *
-                        (1.f / 3.f);
-        const float azimuth = std::atan2(c.x, c.z);
-        part[f] = c.y > 0.12f + 0.18f * std::sin(3.f * azimuth) ? 0 : 1;
+        const Vec3f c = tools::face_centroid(mesh, f);
+        part[f] = c.y > 0.12f + 0.18f * std::sin(3.f * std::atan2(c.x, c.z)) ? 0 : 1;
     }
     return part;
-}
-
-std::string obj_text(const TriangleMesh& mesh, const std::vector<int>& part) {
-    std::string text = "# two-part UV sphere, radius 0.8, 48 x 24 (tools/make_two_part_scene.cpp)\n";
-    text += "mtllib sphere.mtl\no two_part_sphere\n";
-    for (const Vec3f& p : mesh.positions) text += fmt::format("v {:.6f} {:.6f} {:.6f}\n", p.x, p.y, p.z);
-    for (const Vec2f& t : mesh.uvs) text += fmt::format("vt {:.6f} {:.6f}\n", t.x, t.y);
-    int current = -1;
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-        if (part[f] != current) {
-            current = part[f];
-            text += current == 0 ? "usemtl cap\n" : "usemtl base\n";
-        }
-        const Vec3i& p = mesh.triangles[f];
-        const Vec3i& t = mesh.uv_triangles[f];
-        text += fmt::format("f {}/{} {}/{} {}/{}\n", p.x + 1, t.x + 1, p.y + 1, t.y + 1, p.z + 1, t.z + 1);
-    }
-    return text;
 }
 
 // Smooth tileable value noise in [0, 1] (a few octaves of random lattice values).
@@ -85,7 +64,10 @@ void write_all(const std::string& folder) {
     ensure_folder(folder);
     const TriangleMesh mesh = make_uv_sphere(0.8f, 48, 24);
     const std::vector<int> part = face_parts(mesh);
-    write_text_atomically(folder + "/sphere.obj", obj_text(mesh, part));
+    write_text_atomically(folder + "/sphere.obj",
+                          tools::part_obj_text(mesh, part, {"cap", "base"},
+                                               "two-part UV sphere, radius 0.8, 48 x 24 (tools/make_two_part_scene.cpp)",
+                                               "two_part_sphere"));
     write_text_atomically(
         folder + "/sphere.mtl",
         "# two materials sharing one albedo texture\nnewmtl cap\nKd 0.3 0.55 0.25\nmap_Kd albedo.png\n"

@@ -1,5 +1,5 @@
 // `tdf batch grid|run|status|task`: many tdf jobs from a manifest, on this machine or as one
-// Slurm job array (README "tdf batch").
+// Slurm job array (docs/commands/batch.md).
 #include <sys/resource.h>
 #include <tdf/batch/batch_summary.h>
 #include <tdf/batch/grid.h>
@@ -9,6 +9,7 @@
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/core/parallel.h>
+#include <tdf/io/image_io.h>
 #include <tdf/train/run_guard.h>
 
 #include <cstdio>
@@ -52,7 +53,7 @@ std::string this_executable() {
 
 int run_grid(const BatchOptions& o) {
     const std::vector<BatchJob> jobs = make_grid(o.grid);
-    const bool csv = fs::path(o.grid_output).extension() == ".csv";
+    const bool csv = lower_extension(o.grid_output) == ".csv";  // as every other output name: any case
     write_text_atomically(o.grid_output, csv ? manifest_to_csv(jobs) : manifest_to_jsonl(jobs));
     log_info("wrote {} jobs to {} ({} scenes x {} textures x {} override sets)",
              jobs.size(),
@@ -89,8 +90,6 @@ void reset_tries(const BatchFolder& folder, const std::vector<std::size_t>& todo
 }
 
 int run_batch(const BatchOptions& o) {
-    if (o.engine != "local" && o.engine != "slurm")
-        throw_error("--engine must be local or slurm, not '{}'", o.engine);
     // Each Slurm task runs one job: there is no runner to cap or time jobs across the array.
     if (o.engine == "slurm" && (o.timeout > 0 || o.max_failures > 0))
         throw_error(
@@ -223,6 +222,84 @@ int run_task(const BatchOptions& o) {
     return outcome.done == 1 ? 0 : outcome.interrupted == 1 ? kExitInterrupted : 1;
 }
 
+// `tdf batch run` and its options: the engine, retries and caps, and the Slurm settings.
+CLI::App* add_run_subcommand(CLI::App* app, BatchOptions& o) {
+    CLI::App* run =
+        app->add_subcommand("run", "run a manifest's jobs into a batch folder (only those not done)");
+    run->add_option("manifest", o.manifest, "manifest (CSV or JSON lines)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    run->add_option("-o,--output", o.output, "batch folder (created; an existing one is continued)")
+        ->required();
+    run->add_option("--engine", o.engine, "local or slurm")
+        ->check(CLI::IsMember({"local", "slurm"}))
+        ->capture_default_str();
+    run->add_option(
+           "--jobs", o.jobs, "local: jobs at a time (0 = threads / threads-per-job, or one per thread)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    run->add_option(
+           "--threads-per-job", o.threads_per_job, "local: threads of each job (0 = an equal share)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    run->add_option("--max-retries",
+                    o.max_retries,
+                    "tries after the first for a job that failed for a resource (out of memory, "
+                    "killed, timed out); bad input is never retried")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    run->add_option("--max-failures",
+                    o.max_failures,
+                    "start no new job once this many have failed for good in this run (0 = no cap); "
+                    "the rest stay pending for the next run")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    run->add_option("--timeout",
+                    o.timeout,
+                    "local: seconds a job may run before SIGTERM (an optimize checkpoints), SIGKILL 10 s "
+                    "later; ends failed-resource (0 = none)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    run->add_flag("--retry-failed",
+                  o.retry_failed,
+                  "also run jobs that failed for good in earlier runs (e.g. after fixing an input), "
+                  "with a fresh count of tries");
+    run->add_option(
+           "--max-parallel", o.slurm.max_parallel, "slurm: array tasks at a time, %K (0 = no limit)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    run->add_option("--max-array-size",
+                    o.slurm.max_array_size,
+                    "slurm: split into arrays of task ids below this (0 = the cluster's MaxArraySize)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    run->add_option("--retry-mem-factor",
+                    o.slurm.retry_mem_factor,
+                    "slurm: a retry's --mem (from --sbatch-option=--mem=...) times this per failed try")
+        ->check(CLI::Range(1.0, 100.0))
+        ->capture_default_str();
+    run->add_option("--retry-time-factor",
+                    o.slurm.retry_time_factor,
+                    "slurm: a retry's --time (from --sbatch-option=--time=...) times this per failed try")
+        ->check(CLI::Range(1.0, 100.0))
+        ->capture_default_str();
+    run->add_option(
+           "--cpus-per-task", o.slurm.cpus_per_task, "slurm: --cpus-per-task (tdf threads follow it)")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    run->add_option("--signal-seconds",
+                    o.slurm.signal_seconds,
+                    "slurm: seconds before the time limit at which a task checkpoints and requeues itself")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    run->add_option("--sbatch-option",
+                    o.slurm.sbatch_options,
+                    "slurm: an extra sbatch option, e.g. --sbatch-option=--partition=cpu; repeat")
+        ->allow_extra_args(false);
+    run->add_flag("--wait", o.slurm.wait, "slurm: return only when every task and the summary have ended");
+    return run;
+}
+
 }  // namespace
 
 Command register_batch(CLI::App& root) {
@@ -244,77 +321,7 @@ Command register_batch(CLI::App& root) {
     grid->add_option("--command", o->grid.command, "optimize or render")->capture_default_str();
     grid->add_option("-o,--output", o->grid_output, "manifest to write (.jsonl or .csv)")->required();
 
-    CLI::App* run =
-        app->add_subcommand("run", "run a manifest's jobs into a batch folder (only those not done)");
-    run->add_option("manifest", o->manifest, "manifest (CSV or JSON lines)")
-        ->required()
-        ->check(CLI::ExistingFile);
-    run->add_option("-o,--output", o->output, "batch folder (created; an existing one is continued)")
-        ->required();
-    run->add_option("--engine", o->engine, "local or slurm")->capture_default_str();
-    run->add_option(
-           "--jobs", o->jobs, "local: jobs at a time (0 = threads / threads-per-job, or one per thread)")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    run->add_option(
-           "--threads-per-job", o->threads_per_job, "local: threads of each job (0 = an equal share)")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    run->add_option("--max-retries",
-                    o->max_retries,
-                    "tries after the first for a job that failed for a resource (out of memory, "
-                    "killed, timed out); bad input is never retried")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    run->add_option("--max-failures",
-                    o->max_failures,
-                    "start no new job once this many have failed for good in this run (0 = no cap); "
-                    "the rest stay pending for the next run")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    run->add_option("--timeout",
-                    o->timeout,
-                    "local: seconds a job may run before SIGTERM (an optimize checkpoints), SIGKILL 10 s "
-                    "later; ends failed-resource (0 = none)")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    run->add_flag("--retry-failed",
-                  o->retry_failed,
-                  "also run jobs that failed for good in earlier runs (e.g. after fixing an input), "
-                  "with a fresh count of tries");
-    run->add_option(
-           "--max-parallel", o->slurm.max_parallel, "slurm: array tasks at a time, %K (0 = no limit)")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    run->add_option("--max-array-size",
-                    o->slurm.max_array_size,
-                    "slurm: split into arrays of task ids below this (0 = the cluster's MaxArraySize)")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    run->add_option("--retry-mem-factor",
-                    o->slurm.retry_mem_factor,
-                    "slurm: a retry's --mem (from --sbatch-option=--mem=...) times this per failed try")
-        ->check(CLI::Range(1.0, 100.0))
-        ->capture_default_str();
-    run->add_option("--retry-time-factor",
-                    o->slurm.retry_time_factor,
-                    "slurm: a retry's --time (from --sbatch-option=--time=...) times this per failed try")
-        ->check(CLI::Range(1.0, 100.0))
-        ->capture_default_str();
-    run->add_option(
-           "--cpus-per-task", o->slurm.cpus_per_task, "slurm: --cpus-per-task (tdf threads follow it)")
-        ->check(CLI::PositiveNumber)
-        ->capture_default_str();
-    run->add_option("--signal-seconds",
-                    o->slurm.signal_seconds,
-                    "slurm: seconds before the time limit at which a task checkpoints and requeues itself")
-        ->check(CLI::PositiveNumber)
-        ->capture_default_str();
-    run->add_option("--sbatch-option",
-                    o->slurm.sbatch_options,
-                    "slurm: an extra sbatch option, e.g. --sbatch-option=--partition=cpu; repeat")
-        ->allow_extra_args(false);
-    run->add_flag("--wait", o->slurm.wait, "slurm: return only when every task and the summary have ended");
+    CLI::App* run = add_run_subcommand(app, *o);
 
     CLI::App* status =
         app->add_subcommand("status", "per job: done / running / failed (with the error line) / pending");

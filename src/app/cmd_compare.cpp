@@ -1,5 +1,5 @@
 // `tdf compare A B`: idiff-style comparison of two images, or of two folders of images paired by
-// relative path and layer (README "tdf compare").
+// relative path and layer (docs/commands/compare.md).
 // Exit codes: 0 pass; 1 fail (also unreadable files, different channel sets, bad options); 2 size
 // mismatch of two single images. Folders: 0 when every file passes, else 1.
 #include <tdf/core/config.h>
@@ -199,6 +199,122 @@ void write_folder_page(const CompareCliOptions& o, const FolderComparison& r) {
     write_compare_report(o.html, report);
 }
 
+// `tdf compare --json` on two folders: every file's result and the totals.
+void print_folder_json(const CompareCliOptions& o, const FolderComparison& r) {
+    const FolderTotals& t = r.totals;
+    Json files = Json::array();
+    for (const FileComparison& f : r.files) {
+        Json j = {{"path", f.path},
+                  {"status", file_status_name(f.status)},
+                  {"result", f.passed ? "pass" : "fail"}};
+        if (!f.message.empty()) j["message"] = f.message;
+        if (f.status == FileComparison::Status::Compared) {
+            Json layers = Json::array();
+            for (const LayerResult& l : f.result.layers) layers.push_back(layer_json(l));
+            j["size"] = {f.result.width, f.result.height};
+            j["compared_pixels"] = f.result.compared_pixels;
+            j["failed_pixels"] = f.result.failed_pixels;
+            j["fail_percent"] = f.result.fail_percent;
+            j["overall"] = stats_json(f.result.overall);
+            j["layers"] = layers;
+            j["missing_layers"] = f.missing_layers;
+            j["extra_layers"] = f.extra_layers;
+        }
+        if (!f.diff_path.empty()) j["diff"] = f.diff_path;
+        files.push_back(j);
+    }
+    Json totals = {{"files", t.files},
+                   {"compared", t.compared},
+                   {"passed", t.passed},
+                   {"failed", t.failed},
+                   {"missing", t.missing},
+                   {"extra", t.extra},
+                   {"size_mismatch", t.size_mismatch},
+                   {"errors", t.errors},
+                   {"rows", t.rows},
+                   {"failed_rows", t.failed_rows},
+                   {"min_psnr", number_or_null(t.min_psnr)},
+                   {"overall", stats_json(t.overall)}};
+    Json report = {{"result", r.passed ? "pass" : "fail"},
+                   {"a", r.a},
+                   {"b", r.b},
+                   {"thresholds", thresholds_json(o)},
+                   {"files", files},
+                   {"totals", totals}};
+    std::printf("%s\n", report.dump(2).c_str());
+}
+
+// The folder comparison as a table: a row per file and layer, then the totals.
+void print_folder_table(const CompareCliOptions& o, const FolderComparison& r) {
+    const FolderTotals& t = r.totals;
+    std::printf("Comparing folders \"%s\" and \"%s\"\n", r.a.c_str(), r.b.c_str());
+    std::printf("  %-36s %-26s %9s %12s %-12s %9s  %s\n",
+                "file",
+                "pass",
+                "PSNR",
+                "max error",
+                "at",
+                "% over",
+                "result");
+    for (const FileComparison& f : r.files) {
+        if (f.status != FileComparison::Status::Compared) {
+            std::printf("  %-36s %-26s %9s %12s %-12s %9s  %s%s%s\n",
+                        f.path.c_str(),
+                        "-",
+                        "-",
+                        "-",
+                        "-",
+                        "-",
+                        f.passed ? "ok: " : "FAIL: ",
+                        file_status_name(f.status),
+                        f.message.empty() ? "" : (" (" + f.message + ")").c_str());
+            continue;
+        }
+        for (const LayerResult& l : f.result.layers) {
+            std::string at = fmt::format("({}, {})", l.stats.max_x, l.stats.max_y);
+            std::string verdict = l.passed ? "pass" : "FAIL";
+            if (l.stats.nonfinite) verdict += fmt::format(" ({} non-finite)", l.stats.nonfinite);
+            std::printf("  %-36s %-26s %9s %12.6g %-12s %8.4g%%  %s\n",
+                        f.path.c_str(),
+                        l.name.empty() ? "(image)" : l.name.c_str(),
+                        psnr_text(l.stats.psnr).c_str(),
+                        l.stats.max_error,
+                        at.c_str(),
+                        l.fail_percent,
+                        verdict.c_str());
+        }
+        for (const auto& name : f.missing_layers)
+            std::printf("  %-36s %-26s %s\n",
+                        f.path.c_str(),
+                        name.c_str(),
+                        o.allow_missing ? "ok: missing in B" : "FAIL: missing in B");
+        for (const auto& name : f.extra_layers)
+            std::printf("  %-36s %-26s %s\n",
+                        f.path.c_str(),
+                        name.c_str(),
+                        o.allow_extra ? "ok: extra in B" : "FAIL: extra in B");
+        if (!f.diff_path.empty())
+            std::printf("  %-36s diff written to %s\n", f.path.c_str(), f.diff_path.c_str());
+    }
+    std::printf(
+        "  %zu files: %zu compared, %zu passed, %zu failed (%zu missing, %zu extra, %zu size mismatches, "
+        "%zu errors); %zu of %zu rows failed; overall PSNR %s, max error %.6g, worst row PSNR %s\n%s\n",
+        t.files,
+        t.compared,
+        t.passed,
+        t.failed,
+        t.missing,
+        t.extra,
+        t.size_mismatch,
+        t.errors,
+        t.failed_rows,
+        t.rows,
+        psnr_text(t.overall.psnr).c_str(),
+        t.overall.max_error,
+        psnr_text(t.min_psnr).c_str(),
+        r.passed ? "PASS" : "FAILURE");
+}
+
 int run_compare_folders(const CompareCliOptions& o) {
     FolderCompareOptions fo;
     fo.compare = o.compare;
@@ -207,117 +323,11 @@ int run_compare_folders(const CompareCliOptions& o) {
     fo.diff_folder = o.diff;
     fo.diff_scale = o.diff_scale;
     const FolderComparison r = compare_folders(o.a, o.b, fo);
-    const FolderTotals& t = r.totals;
     if (!o.html.empty()) write_folder_page(o, r);
-    if (o.json) {
-        Json files = Json::array();
-        for (const FileComparison& f : r.files) {
-            Json j = {{"path", f.path},
-                      {"status", file_status_name(f.status)},
-                      {"result", f.passed ? "pass" : "fail"}};
-            if (!f.message.empty()) j["message"] = f.message;
-            if (f.status == FileComparison::Status::Compared) {
-                Json layers = Json::array();
-                for (const LayerResult& l : f.result.layers) layers.push_back(layer_json(l));
-                j["size"] = {f.result.width, f.result.height};
-                j["compared_pixels"] = f.result.compared_pixels;
-                j["failed_pixels"] = f.result.failed_pixels;
-                j["fail_percent"] = f.result.fail_percent;
-                j["overall"] = stats_json(f.result.overall);
-                j["layers"] = layers;
-                j["missing_layers"] = f.missing_layers;
-                j["extra_layers"] = f.extra_layers;
-            }
-            if (!f.diff_path.empty()) j["diff"] = f.diff_path;
-            files.push_back(j);
-        }
-        Json totals = {{"files", t.files},
-                       {"compared", t.compared},
-                       {"passed", t.passed},
-                       {"failed", t.failed},
-                       {"missing", t.missing},
-                       {"extra", t.extra},
-                       {"size_mismatch", t.size_mismatch},
-                       {"errors", t.errors},
-                       {"rows", t.rows},
-                       {"failed_rows", t.failed_rows},
-                       {"min_psnr", number_or_null(t.min_psnr)},
-                       {"overall", stats_json(t.overall)}};
-        Json report = {{"result", r.passed ? "pass" : "fail"},
-                       {"a", r.a},
-                       {"b", r.b},
-                       {"thresholds", thresholds_json(o)},
-                       {"files", files},
-                       {"totals", totals}};
-        std::printf("%s\n", report.dump(2).c_str());
-    } else {
-        std::printf("Comparing folders \"%s\" and \"%s\"\n", r.a.c_str(), r.b.c_str());
-        std::printf("  %-36s %-26s %9s %12s %-12s %9s  %s\n",
-                    "file",
-                    "pass",
-                    "PSNR",
-                    "max error",
-                    "at",
-                    "% over",
-                    "result");
-        for (const FileComparison& f : r.files) {
-            if (f.status != FileComparison::Status::Compared) {
-                std::printf("  %-36s %-26s %9s %12s %-12s %9s  %s%s%s\n",
-                            f.path.c_str(),
-                            "-",
-                            "-",
-                            "-",
-                            "-",
-                            "-",
-                            f.passed ? "ok: " : "FAIL: ",
-                            file_status_name(f.status),
-                            f.message.empty() ? "" : (" (" + f.message + ")").c_str());
-                continue;
-            }
-            for (const LayerResult& l : f.result.layers) {
-                std::string at = fmt::format("({}, {})", l.stats.max_x, l.stats.max_y);
-                std::string verdict = l.passed ? "pass" : "FAIL";
-                if (l.stats.nonfinite) verdict += fmt::format(" ({} non-finite)", l.stats.nonfinite);
-                std::printf("  %-36s %-26s %9s %12.6g %-12s %8.4g%%  %s\n",
-                            f.path.c_str(),
-                            l.name.empty() ? "(image)" : l.name.c_str(),
-                            psnr_text(l.stats.psnr).c_str(),
-                            l.stats.max_error,
-                            at.c_str(),
-                            l.fail_percent,
-                            verdict.c_str());
-            }
-            for (const auto& name : f.missing_layers)
-                std::printf("  %-36s %-26s %s\n",
-                            f.path.c_str(),
-                            name.c_str(),
-                            o.allow_missing ? "ok: missing in B" : "FAIL: missing in B");
-            for (const auto& name : f.extra_layers)
-                std::printf("  %-36s %-26s %s\n",
-                            f.path.c_str(),
-                            name.c_str(),
-                            o.allow_extra ? "ok: extra in B" : "FAIL: extra in B");
-            if (!f.diff_path.empty())
-                std::printf("  %-36s diff written to %s\n", f.path.c_str(), f.diff_path.c_str());
-        }
-        std::printf(
-            "  %zu files: %zu compared, %zu passed, %zu failed (%zu missing, %zu extra, %zu size mismatches, "
-            "%zu errors); %zu of %zu rows failed; overall PSNR %s, max error %.6g, worst row PSNR %s\n%s\n",
-            t.files,
-            t.compared,
-            t.passed,
-            t.failed,
-            t.missing,
-            t.extra,
-            t.size_mismatch,
-            t.errors,
-            t.failed_rows,
-            t.rows,
-            psnr_text(t.overall.psnr).c_str(),
-            t.overall.max_error,
-            psnr_text(t.min_psnr).c_str(),
-            r.passed ? "PASS" : "FAILURE");
-    }
+    if (o.json)
+        print_folder_json(o, r);
+    else
+        print_folder_table(o, r);
     return r.passed ? kExitPass : kExitFail;
 }
 

@@ -1,4 +1,4 @@
-// tdf optimize: learn aligned albedo and tactile normal textures for a mesh (README "tdf optimize").
+// tdf optimize: learn aligned albedo and tactile normal textures for a mesh (docs/commands/optimize.md).
 #include "commands.h"
 
 #include <tdf/train/optimize_run.h>

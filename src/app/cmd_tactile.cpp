@@ -1,9 +1,10 @@
 // `tdf tactile <step>`: GelSight captures, height maps and normal maps to tileable tactile
-// normal maps at physical scale (spec 6, README "tdf tactile").
+// normal maps at physical scale (spec 6, docs/commands/tactile.md).
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
+#include <tdf/tactile/height_export.h>
 #include <tdf/tactile/height_input.h>
 #include <tdf/tactile/material_statistics.h>
 #include <tdf/tactile/normal_map.h>
@@ -317,6 +318,28 @@ QuiltOptions resolve_block(QuiltOptions options, const std::string& block, const
     return options;
 }
 
+/// The height map the written normals (`decoded`, as a reader of the file sees them) stand for,
+/// beside `output` as `<stem>_height.exr` / `_height.png` (issue 24). Returns the scale as JSON.
+Json write_convert_height(const std::string& output, const HeightMap& map, const Image& decoded) {
+    ExportScale scale;
+    scale.periodic = map.tileable;
+    scale.mm_per_texel = map.mm_per_pixel > 0 ? map.mm_per_pixel : 1.0f;  // else heights in pixel widths
+    ExportedHeight height = export_height(decoded, scale, output);
+    height.map.pixel_heights = !(map.mm_per_pixel > 0);
+    if (height.map.pixel_heights) height.map.mm_per_pixel = 0;
+    const std::string base = (std::filesystem::path(output).parent_path() / std::filesystem::path(output).stem()).string();
+    write_exported_height(base, height);
+    Json j = exported_height_json(height, scale, std::filesystem::path(base + "_height.png").filename().string(),
+                                  std::filesystem::path(base + "_height.exr").filename().string());
+    if (height.map.pixel_heights) j["unit"] = "pixel";  // the capture's pixel size is unknown
+    log_info("wrote {}_height.exr and .png: {:.4g} .. {:.4g} {} (normals recomputed from it: mean cosine {:.5f})",
+             base, height.min_mm, height.max_mm, height.map.pixel_heights ? "pixel widths" : "mm", height.mean_cosine);
+    if (height.mean_cosine < kHeightConsistencyLimit)
+        log_warning("{}: the height map reproduces the normal map only to a mean cosine of {:.4f} (limit {})", output,
+                    height.mean_cosine, kHeightConsistencyLimit);
+    return j;
+}
+
 // Options of every step; each step reads the ones it registered.
 struct State {
     InputArgs input;
@@ -391,21 +414,13 @@ void run_normal(const State& s) {
     s.normal.write(s.out, map, s.normal.resolve_strength(map));
 }
 
-void run_convert(const State& s) {
-    require_normal_map_name(s.out);
-    if (s.no_quilt && s.inputs.size() > 1)
-        throw_error("--no-quilt makes a normal map of one patch, but {} inputs were given", s.inputs.size());
-    if (s.optimization.iterations.size() > s.optimization.windows.size() && s.optimize_iterations->count() > 0)
-        throw_error("--optimize-iterations: {} counts for {} window sides (--optimize-windows); give at most one "
-                    "per side",
-                    s.optimization.iterations.size(),
-                    s.optimization.windows.size());
+// convert's first step: each input's patch (its figures kept for the statistics and --steps-png).
+std::vector<HeightMap> extract_convert_patches(const State& s, std::vector<PatchSteps>& figures) {
     const PatchOptions patch_options = s.patch.resolved();
     const bool steps = !s.steps_dir.empty();
-    if (steps) ensure_folder(s.steps_dir);
     auto step_path = [&](const std::string& name) { return s.steps_dir + "/" + name; };
     std::vector<HeightMap> patches;
-    std::vector<PatchSteps> figures(s.inputs.size());
+    figures.assign(s.inputs.size(), PatchSteps{});
     for (std::size_t i = 0; i < s.inputs.size(); ++i) {
         patches.push_back(extract_patch(s.input.load(s.inputs[i]), patch_options, &figures[i]));
         log_info("{}: textured region {:.1f} % of the input ({}), {:.1f} % of the patch",
@@ -424,52 +439,60 @@ void run_convert(const State& s) {
         if (!f.smoothed.empty()) write_height_preview(step_path(prefix + "4_smoothed.png"), f.smoothed);
         write_height_preview(step_path(prefix + "5_patch.png"), f.patch);
     }
-    HeightMap result = patches[0];
-    const float strength = s.normal.resolve_strength(patches[0]);  // logs its choice once
-    Image cuts;  // where the quilt's boundary cuts run
-    if (!s.no_quilt) {
-        QuiltStats stats;
-        const QuiltOptions quilt_options = resolve_block(s.convert_quilt.options, s.convert_quilt.block, patches);
-        result = quilt_height_maps(patches, quilt_options, &stats, &cuts);
-        log_quilt(stats, result);
-        // auto: the quilt, unless it misses the issue's limits and texture optimisation misses
-        // fewer (README "tdf tactile": the regions of thin rims and lines).
-        auto misses = [&](const HeightMap& map) {
-            const Image out = normal_map_from_height(map, s.normal.mode(), strength);
-            std::vector<MaterialComparison> c;
-            for (std::size_t i = 0; i < s.inputs.size(); ++i)
-                c.push_back(
-                    compare_material(scale_normal_slopes(figures[i].input_normals, strength), figures[i].region, out));
-            return material_misses(c);
-        };
-        const double quilt_misses = s.synthesis == "auto" ? misses(result) : 0.0;
-        if (s.synthesis == "optimize" || (s.synthesis == "auto" && quilt_misses > 0)) {
-            if (steps) write_height_preview(step_path("6_quilted_initial.png"), result.height);
-            TextureOptimizationOptions o = s.optimization;
-            o.seed = quilt_options.seed;
-            o.min_coverage = quilt_options.min_coverage;  // one --min-coverage for blocks and windows
-            // The default counts (8 at the coarsest side) follow the sides given.
-            if (s.optimize_iterations->count() == 0 && o.iterations.size() > o.windows.size())
-                o.iterations.resize(std::max<std::size_t>(o.windows.size(), 1));
-            HeightMap optimized = optimize_height_maps(patches, result, o);
-            const double optimized_misses = s.synthesis == "auto" ? misses(optimized) : 0.0;
-            if (s.synthesis == "auto")
-                log_info("the quilt misses the material limits by {:.3f}, texture optimisation by {:.3f}: keeping {}",
-                         quilt_misses,
-                         optimized_misses,
-                         optimized_misses < quilt_misses ? "the optimised map" : "the quilt");
-            if (s.synthesis == "optimize" || optimized_misses < quilt_misses) result = std::move(optimized);
-        }
-        if (steps) write_height_preview(step_path("6_quilted.png"), result.height);
-    }
+    return patches;
+}
 
-    // What the output keeps of each input's material (README "tdf tactile": statistics).
-    const Image output = normal_map_from_height(result, s.normal.mode(), strength);
-    const bool png = lower_extension(s.out) != ".exr";
-    const int bits = png ? s.normal.resolve_bits(output) : 32;
-    const Image decoded = png ? quantized_normals(output, bits) : output;
-    std::vector<std::string> reports;
-    std::vector<Image> compared(s.inputs.size());
+// convert's synthesis: the quilt, or texture optimisation started from it (--synthesis optimize,
+// or auto when the quilt misses the material limits by more); `cuts` gets the quilt's seams.
+HeightMap synthesize_convert(const State& s, const std::vector<HeightMap>& patches,
+                             const std::vector<PatchSteps>& figures, float strength, Image& cuts) {
+    const bool steps = !s.steps_dir.empty();
+    auto step_path = [&](const std::string& name) { return s.steps_dir + "/" + name; };
+    HeightMap result = patches[0];
+    QuiltStats stats;
+    const QuiltOptions quilt_options = resolve_block(s.convert_quilt.options, s.convert_quilt.block, patches);
+    result = quilt_height_maps(patches, quilt_options, &stats, &cuts);
+    log_quilt(stats, result);
+    // auto: the quilt, unless it misses the issue's limits and texture optimisation misses
+    // fewer (docs/commands/tactile.md: the regions of thin rims and lines).
+    auto misses = [&](const HeightMap& map) {
+        const Image out = normal_map_from_height(map, s.normal.mode(), strength);
+        std::vector<MaterialComparison> c;
+        for (std::size_t i = 0; i < s.inputs.size(); ++i)
+            c.push_back(
+                compare_material(scale_normal_slopes(figures[i].input_normals, strength), figures[i].region, out));
+        return material_misses(c);
+    };
+    const double quilt_misses = s.synthesis == "auto" ? misses(result) : 0.0;
+    if (s.synthesis == "optimize" || (s.synthesis == "auto" && quilt_misses > 0)) {
+        if (steps) write_height_preview(step_path("6_quilted_initial.png"), result.height);
+        TextureOptimizationOptions o = s.optimization;
+        o.seed = quilt_options.seed;
+        o.min_coverage = quilt_options.min_coverage;  // one --min-coverage for blocks and windows
+        // The default counts (8 at the coarsest side) follow the sides given.
+        if (s.optimize_iterations->count() == 0 && o.iterations.size() > o.windows.size())
+            o.iterations.resize(std::max<std::size_t>(o.windows.size(), 1));
+        HeightMap optimized = optimize_height_maps(patches, result, o);
+        const double optimized_misses = s.synthesis == "auto" ? misses(optimized) : 0.0;
+        if (s.synthesis == "auto")
+            log_info("the quilt misses the material limits by {:.3f}, texture optimisation by {:.3f}: keeping {}",
+                     quilt_misses,
+                     optimized_misses,
+                     optimized_misses < quilt_misses ? "the optimised map" : "the quilt");
+        if (s.synthesis == "optimize" || optimized_misses < quilt_misses) result = std::move(optimized);
+    }
+    if (steps) write_height_preview(step_path("6_quilted.png"), result.height);
+    return result;
+}
+
+// What the output keeps of each input's material (docs/commands/tactile.md: statistics), logged,
+// warned about and returned as one JSON object per input; `compared` gets the input normals
+// the numbers describe.
+std::vector<Json> report_convert_material(const State& s, const std::vector<HeightMap>& patches,
+                                          const std::vector<PatchSteps>& figures, float strength,
+                                          const Image& decoded, std::vector<Image>& compared) {
+    std::vector<Json> reports;
+    compared.assign(s.inputs.size(), Image());
     for (std::size_t i = 0; i < s.inputs.size(); ++i) {
         // The input's own slopes where they are known: a strength other than 1 shows as a
         // steeper or flatter output, not as an input that changed with it (issue 28).
@@ -501,13 +524,56 @@ void run_convert(const State& s) {
                      c.input_tilt_ratio,
                      100.0 * c.input_flat,
                      100.0 * (1.0 - c.region.fraction));
-        // The comparison's keys, then how the input was taken (README "tdf tactile": report keys).
-        const std::string json = c.json();
-        reports.push_back(fmt::format("{}, \"strength\": {:.4g}, \"input_slopes_known\": {}}}",
-                                      json.substr(0, json.size() - 1),
-                                      strength,
-                                      known));
+        // The comparison's keys, then how the input was taken (docs/commands/tactile.md: report keys).
+        Json report = c.to_json();
+        report["strength"] = rounded_significant(strength, 4);
+        report["input_slopes_known"] = known;
+        reports.push_back(std::move(report));
     }
+    return reports;
+}
+
+// A tileable result: its seam statistics, logged, warned about and kept in the metadata.
+void report_convert_seams(const State& s, const HeightMap& result, const Image& cuts, ImageMetadata& metadata) {
+    const bool steps = !s.steps_dir.empty();
+    auto step_path = [&](const std::string& name) { return s.steps_dir + "/" + name; };
+    const SeamStatistics seams = seam_statistics(result.height, cuts);
+    log_info("seams: height gradient energy on the cuts {:.2f}x the rest's, step across the wrap {:.2f}x "
+             "(columns) and {:.2f}x (rows) the step of the lines next to it{}",
+             seams.cut_ratio,
+             seams.wrap_ratio_columns,
+             seams.wrap_ratio_rows,
+             seams.duplicated_border ? ", duplicated border lines" : "");
+    if (std::max({seams.cut_ratio, seams.wrap_ratio_columns, seams.wrap_ratio_rows}) > kSeamLimit ||
+        seams.duplicated_border)
+        log_warning("{}: seams may be visible (limit {:.1f}x the interior)", s.out, kSeamLimit);
+    metadata["tdf:seams"] = seams.json();
+    if (steps) write_text_atomically(step_path("8_seams.json"), seams.json() + "\n");
+}
+
+void run_convert(const State& s) {
+    require_normal_map_name(s.out);
+    if (s.no_quilt && s.inputs.size() > 1)
+        throw_error("--no-quilt makes a normal map of one patch, but {} inputs were given", s.inputs.size());
+    if (s.optimization.iterations.size() > s.optimization.windows.size() && s.optimize_iterations->count() > 0)
+        throw_error("--optimize-iterations: {} counts for {} window sides (--optimize-windows); give at most one "
+                    "per side",
+                    s.optimization.iterations.size(),
+                    s.optimization.windows.size());
+    const bool steps = !s.steps_dir.empty();
+    if (steps) ensure_folder(s.steps_dir);
+    auto step_path = [&](const std::string& name) { return s.steps_dir + "/" + name; };
+    std::vector<PatchSteps> figures;
+    const std::vector<HeightMap> patches = extract_convert_patches(s, figures);
+    const float strength = s.normal.resolve_strength(patches[0]);  // logs its choice once
+    Image cuts;  // where the quilt's boundary cuts run
+    HeightMap result = s.no_quilt ? patches[0] : synthesize_convert(s, patches, figures, strength, cuts);
+    const Image output = normal_map_from_height(result, s.normal.mode(), strength);
+    const bool png = lower_extension(s.out) != ".exr";
+    const int bits = png ? s.normal.resolve_bits(output) : 32;
+    const Image decoded = png ? quantized_normals(output, bits) : output;
+    std::vector<Image> compared;
+    const std::vector<Json> reports = report_convert_material(s, patches, figures, strength, decoded, compared);
     for (std::size_t i = 0; i < s.inputs.size() && steps; ++i) {  // the input the numbers describe
         const std::string prefix = s.inputs.size() > 1 ? fmt::format("input{}_", i) : "";
         write_normal_map(step_path(prefix + "0_input_normal.png"),
@@ -516,23 +582,10 @@ void run_convert(const State& s) {
                          s.inputs[i],
                          png ? bits : 16);
     }
-    const std::string material =
-        reports.size() == 1 ? reports[0] : fmt::format("[{}]", fmt::join(reports, ", "));
+    const std::string material = reports.size() == 1 ? reports[0].dump() : Json(reports).dump();
     ImageMetadata metadata{{"tdf:material", material}};
-    if (!s.no_quilt && result.tileable) {
-        const SeamStatistics seams = seam_statistics(result.height, cuts);
-        log_info("seams: height gradient energy on the cuts {:.2f}x the rest's, step across the wrap {:.2f}x "
-                 "(columns) and {:.2f}x (rows) the step of the lines next to it{}",
-                 seams.cut_ratio,
-                 seams.wrap_ratio_columns,
-                 seams.wrap_ratio_rows,
-                 seams.duplicated_border ? ", duplicated border lines" : "");
-        if (std::max({seams.cut_ratio, seams.wrap_ratio_columns, seams.wrap_ratio_rows}) > kSeamLimit ||
-            seams.duplicated_border)
-            log_warning("{}: seams may be visible (limit {:.1f}x the interior)", s.out, kSeamLimit);
-        metadata["tdf:seams"] = seams.json();
-        if (steps) write_text_atomically(step_path("8_seams.json"), seams.json() + "\n");
-    }
+    if (!s.no_quilt && result.tileable) report_convert_seams(s, result, cuts, metadata);
+    metadata["tdf:height"] = write_convert_height(s.out, result, decoded).dump();
     NormalArgs normal = s.normal;
     normal.bits = png ? std::to_string(bits) : normal.bits;
     normal.write(s.out, result, strength, metadata);
@@ -620,13 +673,16 @@ Command register_tactile(CLI::App& root) {
     s->convert_quilt.add(s->convert, true);
     s->normal.add(s->convert);
 
+    const Command simulate = register_tactile_simulate(*app);
+
     // Global flags (--threads, -q) may follow the step, as they may follow other commands.
     for (CLI::App* step : {s->height, s->patch_cmd, s->quilt_cmd, s->normal_cmd, s->convert})
         step->fallthrough();
 
     Command command;
     command.app = app;
-    command.run = [s]() -> int {
+    command.run = [s, simulate]() -> int {
+        if (simulate.app->parsed()) return simulate.run();
         if (s->height->parsed()) run_height(*s);
         if (s->patch_cmd->parsed()) run_patch(*s);
         if (s->quilt_cmd->parsed()) run_quilt(*s);

@@ -24,6 +24,8 @@ struct GlobalOptions {
 Command register_render(CLI::App& root);
 Command register_compare(CLI::App& root);
 Command register_tactile(CLI::App& root);
+/// `tdf tactile simulate` (cmd_tactile_simulate.cpp): a step of `tdf tactile`, on its parent.
+Command register_tactile_simulate(CLI::App& tactile);
 Command register_atlas(CLI::App& root);
 Command register_optimize(CLI::App& root);
 Command register_batch(CLI::App& root);

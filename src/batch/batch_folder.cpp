@@ -59,6 +59,22 @@ JobEnd classify_job_end(int exit_code, int signal, bool timed_out) {
     return JobEnd::FailedInput;
 }
 
+JobStatus status_after(JobEnd end) {
+    TDF_CHECK(end != JobEnd::None);  // pending or running: no attempt has ended
+    switch (end) {
+        case JobEnd::Done:
+            return JobStatus::Done;
+        case JobEnd::FailedInput:
+        case JobEnd::FailedResource:
+            return JobStatus::Failed;
+        case JobEnd::Preempted:
+            return JobStatus::Interrupted;
+        case JobEnd::None:
+            break;
+    }
+    return JobStatus::Failed;
+}
+
 namespace {
 JobStatus parse_status(const std::string& s) {
     for (JobStatus status :
@@ -248,8 +264,7 @@ JobState BatchFolder::read_state(const BatchJob& job) const {
     if (same_host_and_gone ||
         (!state.slurm_job.empty() && !slurm_task_alive(state.slurm_job, path("state")))) {
         // The runner itself was killed (OOM killer, node failure): not the job's input.
-        state.status = JobStatus::Failed;
-        state.end = JobEnd::FailedResource;
+        state.end_attempt(JobEnd::FailedResource);
         state.tries += 1;  // the attempt ended, unrecorded
         state.failed_hosts.push_back(state.host);
         state.error = "the runner stopped without recording a result (killed?)";

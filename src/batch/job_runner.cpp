@@ -128,20 +128,16 @@ void collect_job_result(const BatchFolder& folder, const BatchJob& job, int exit
     const auto records = completion_records(out);
     const bool needs_record = job.command == "optimize" || job.command == "render";
     if (!timed_out && exit_code == 0 && (!needs_record || !records.empty())) {
-        state.status = JobStatus::Done;
-        state.end = JobEnd::Done;
+        state.end_attempt(JobEnd::Done);
     } else if (!timed_out && exit_code == 0) {
-        state.status = JobStatus::Interrupted;
-        state.end = JobEnd::Preempted;
+        state.end_attempt(JobEnd::Preempted);
         state.error = "exited without a completion record (--stop-after?); the next run continues it";
     } else {
-        state.end = classify_job_end(exit_code, signal, timed_out);
+        state.end_attempt(classify_job_end(exit_code, signal, timed_out));
         state.error = error_line(log_tail);
         if (state.end == JobEnd::Preempted) {
-            state.status = JobStatus::Interrupted;
             if (state.error.empty()) state.error = "stopped by " + signal_name(signal);
         } else {
-            state.status = JobStatus::Failed;
             if (timed_out)
                 state.error = fmt::format("timed out after {:.0f} s (--timeout){}",
                                           state.seconds,
@@ -213,172 +209,186 @@ void requeue_this_task() {
 
 }  // namespace
 
-JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
-    using Clock = std::chrono::steady_clock;
-    JobRunOutcome outcome;
-    sigset_t waited, previous;
-    sigemptyset(&waited);
-    for (int s : {SIGCHLD, SIGTERM, SIGINT, SIGUSR1}) sigaddset(&waited, s);
-    sigprocmask(SIG_BLOCK, &waited, &previous);
+namespace {
 
+using Clock = std::chrono::steady_clock;
+
+Clock::duration seconds(double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+// One run_jobs call: the queue, the running children and the counts, and the four things that
+// happen to them (a job starts, ends and is counted; a timeout comes due).
+struct JobLoop {
+    const BatchFolder& folder;
+    const JobRunPlan& plan;
+    JobRunOutcome outcome;
     std::map<pid_t, RunningJob> running;
-    std::deque<std::size_t> queue(plan.indices.begin(), plan.indices.end());
-    const int parallel = std::max(1, plan.parallel);
+    std::deque<std::size_t> queue;
     const char* array_job = std::getenv("SLURM_ARRAY_JOB_ID");
     const char* array_task = std::getenv("SLURM_ARRAY_TASK_ID");
-    const auto seconds = [](double s) {
-        return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
-    };
 
-    // After an attempt's state is written: count it, and queue a resource failure again while
-    // it has tries left (unless starting has stopped: the next run continues it then).
-    const auto account = [&](const BatchJob& job, std::size_t index, const JobState& state) {
-        switch (state.status) {
-            case JobStatus::Done:
-                ++outcome.done;
-                log_info("done {} in {:.1f} s", job.name, state.seconds);
-                return;
-            case JobStatus::Interrupted:
-                ++outcome.interrupted;
-                log_info("interrupted {}: {}", job.name, state.error);
-                if (plan.requeue_interrupted) requeue_this_task();
-                return;
-            default:
-                break;
-        }
-        if (!failed_for_good(state, plan.max_retries)) {
-            if (outcome.stopped || outcome.capped) {
-                ++outcome.not_started;
-                log_warning("failed {} ({}): {}; not retried now, the next run does",
-                            job.name,
-                            job_end_name(state.end),
-                            state.error);
-            } else {
-                ++outcome.retried;
-                queue.push_back(index);
-                log_warning("failed {} ({}, try {} of {}): {}; retrying",
-                            job.name,
-                            job_end_name(state.end),
-                            state.tries,
-                            plan.max_retries + 1,
-                            state.error);
-            }
+    JobLoop(const BatchFolder& f, const JobRunPlan& p)
+        : folder(f), plan(p), queue(p.indices.begin(), p.indices.end()) {}
+
+    void account(const BatchJob& job, std::size_t index, const JobState& state);
+    void start_job(std::size_t index);
+    void finish_job(pid_t pid, int status);
+    Clock::time_point enforce_timeouts();
+    void run(const sigset_t& waited);
+};
+
+// After an attempt's state is written: count it, and queue a resource failure again while it
+// has tries left (unless starting has stopped: the next run continues it then).
+void JobLoop::account(const BatchJob& job, std::size_t index, const JobState& state) {
+    switch (state.status) {
+        case JobStatus::Done:
+            ++outcome.done;
+            log_info("done {} in {:.1f} s", job.name, state.seconds);
             return;
+        case JobStatus::Interrupted:
+            ++outcome.interrupted;
+            log_info("interrupted {}: {}", job.name, state.error);
+            if (plan.requeue_interrupted) requeue_this_task();
+            return;
+        default:
+            break;
+    }
+    if (!failed_for_good(state, plan.max_retries)) {
+        if (outcome.stopped || outcome.capped) {
+            ++outcome.not_started;
+            log_warning("failed {} ({}): {}; not retried now, the next run does",
+                        job.name,
+                        job_end_name(state.end),
+                        state.error);
+        } else {
+            ++outcome.retried;
+            queue.push_back(index);
+            log_warning("failed {} ({}, try {} of {}): {}; retrying",
+                        job.name,
+                        job_end_name(state.end),
+                        state.tries,
+                        plan.max_retries + 1,
+                        state.error);
         }
-        ++outcome.failed;
-        log_warning("failed {} ({}): {}", job.name, job_end_name(state.end), state.error);
-        if (plan.max_failures > 0 && outcome.failed >= plan.max_failures && !outcome.capped) {
-            outcome.capped = true;
-            log_warning(
-                "{} job(s) failed for good (--max-failures {}): starting no new job; the "
-                "next run continues the rest",
-                outcome.failed,
-                plan.max_failures);
-        }
-    };
+        return;
+    }
+    ++outcome.failed;
+    log_warning("failed {} ({}): {}", job.name, job_end_name(state.end), state.error);
+    if (plan.max_failures > 0 && outcome.failed >= plan.max_failures && !outcome.capped) {
+        outcome.capped = true;
+        log_warning(
+            "{} job(s) failed for good (--max-failures {}): starting no new job; the "
+            "next run continues the rest",
+            outcome.failed,
+            plan.max_failures);
+    }
+}
 
-    const auto start_job = [&](std::size_t index) {
-        const BatchJob& job = folder.jobs()[index];
-        JobState state = folder.read_state(job);
-        state.status = JobStatus::Running;
-        state.end = JobEnd::None;
-        state.attempts += 1;
-        state.host = host_name();
-        state.pid = getpid();
-        state.started = utc_timestamp();
-        state.finished.clear();
-        state.error.clear();
-        state.exit_code = -1;
-        state.signal = 0;
-        state.slurm_job = array_job && array_task ? std::string(array_job) + "_" + array_task : "";
-        state.output = folder.output_folder(job);
-        const std::vector<std::string> argv = job_command_line(folder, job, plan.threads_per_job);
-        state.command_line = format_command(argv);
-        ensure_folder(state.output);
-        const std::string log = folder.log_path(job);
-        ensure_folder(fs::path(log).parent_path().string());
-        {
-            std::ofstream header(log, std::ios::app);
-            header << "=== tdf batch: job " << job.name << ", attempt " << state.attempts << " on "
-                   << state.host << " at " << state.started
-                   << (state.slurm_job.empty() ? "" : ", Slurm " + state.slurm_job) << "\n"
-                   << "=== " << state.command_line << "\n";
-        }
-        std::error_code ec;
-        const std::uintmax_t offset = fs::file_size(log, ec);
+void JobLoop::start_job(std::size_t index) {
+    const BatchJob& job = folder.jobs()[index];
+    JobState state = folder.read_state(job);
+    state.status = JobStatus::Running;
+    state.end = JobEnd::None;
+    state.attempts += 1;
+    state.host = host_name();
+    state.pid = getpid();
+    state.started = utc_timestamp();
+    state.finished.clear();
+    state.error.clear();
+    state.exit_code = -1;
+    state.signal = 0;
+    state.slurm_job = array_job && array_task ? std::string(array_job) + "_" + array_task : "";
+    state.output = folder.output_folder(job);
+    const std::vector<std::string> argv = job_command_line(folder, job, plan.threads_per_job);
+    state.command_line = format_command(argv);
+    ensure_folder(state.output);
+    const std::string log = folder.log_path(job);
+    ensure_folder(fs::path(log).parent_path().string());
+    {
+        std::ofstream header(log, std::ios::app);
+        header << "=== tdf batch: job " << job.name << ", attempt " << state.attempts << " on "
+               << state.host << " at " << state.started
+               << (state.slurm_job.empty() ? "" : ", Slurm " + state.slurm_job) << "\n"
+               << "=== " << state.command_line << "\n";
+    }
+    std::error_code ec;
+    const std::uintmax_t offset = fs::file_size(log, ec);
+    folder.write_state(job, state);
+    const std::string stdout_path = job.command == "compare" ? state.output + "/compare.json" : log;
+    // The child inherits these (fork): it may name itself in its own files, and the test-only
+    // TDF_TEST_KILL_JOBS (main.cpp) picks its victims by them.
+    setenv("TDF_BATCH_JOB", job.name.c_str(), 1);
+    setenv("TDF_BATCH_ATTEMPT", std::to_string(state.attempts).c_str(), 1);
+    try {
+        const pid_t pid =
+            spawn_process(argv, folder.working_folder(), stdout_path, log, job.command != "compare");
+        running[pid] = RunningJob{index, state, ec ? 0 : offset, Clock::now()};
+        ++outcome.started;
+        log_info("started {} ({} of {}): {}",
+                 job.name,
+                 outcome.done + outcome.failed + outcome.interrupted + int(running.size()),
+                 plan.indices.size(),
+                 state.command_line);
+    } catch (const Error& e) {
+        // fork or exec failed: the machine's doing (process limit, memory), not the job's.
+        state.end_attempt(JobEnd::FailedResource);
+        state.tries += 1;
+        state.failed_hosts.push_back(state.host);
+        state.error = e.what();
+        state.finished = utc_timestamp();
         folder.write_state(job, state);
-        const std::string stdout_path = job.command == "compare" ? state.output + "/compare.json" : log;
-        // The child inherits these (fork): it may name itself in its own files, and the test-only
-        // TDF_TEST_KILL_JOBS (main.cpp) picks its victims by them.
-        setenv("TDF_BATCH_JOB", job.name.c_str(), 1);
-        setenv("TDF_BATCH_ATTEMPT", std::to_string(state.attempts).c_str(), 1);
-        try {
-            const pid_t pid =
-                spawn_process(argv, folder.working_folder(), stdout_path, log, job.command != "compare");
-            running[pid] = RunningJob{index, state, ec ? 0 : offset, Clock::now()};
-            ++outcome.started;
-            log_info("started {} ({} of {}): {}",
-                     job.name,
-                     outcome.done + outcome.failed + outcome.interrupted + int(running.size()),
-                     plan.indices.size(),
-                     state.command_line);
-        } catch (const Error& e) {
-            // fork or exec failed: the machine's doing (process limit, memory), not the job's.
-            state.status = JobStatus::Failed;
-            state.end = JobEnd::FailedResource;
-            state.tries += 1;
-            state.failed_hosts.push_back(state.host);
-            state.error = e.what();
-            state.finished = utc_timestamp();
-            folder.write_state(job, state);
-            account(job, index, state);
+        account(job, index, state);
+    }
+}
+
+void JobLoop::finish_job(pid_t pid, int status) {
+    auto it = running.find(pid);
+    if (it == running.end()) return;
+    RunningJob r = std::move(it->second);
+    running.erase(it);
+    const BatchJob& job = folder.jobs()[r.index];
+    const int exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+    r.state.seconds = std::chrono::duration<double>(Clock::now() - r.start).count();
+    r.state.seconds_total += r.state.seconds;
+    r.state.finished = utc_timestamp();
+    r.state.pid = 0;
+    collect_job_result(folder,
+                       job,
+                       exit_code,
+                       signal,
+                       r.timed_out,
+                       read_from(folder.log_path(job), r.log_offset),
+                       r.state);
+    folder.write_state(job, r.state);
+    account(job, r.index, r.state);
+}
+
+// --timeout: SIGTERM at the limit, SIGKILL after the grace; returns the next such moment.
+Clock::time_point JobLoop::enforce_timeouts() {
+    Clock::time_point next = Clock::time_point::max();
+    if (plan.timeout_seconds <= 0) return next;
+    const Clock::time_point now = Clock::now();
+    for (auto& [pid, r] : running) {
+        const Clock::time_point term = r.start + seconds(plan.timeout_seconds);
+        const Clock::time_point kill_at = term + seconds(kTimeoutGraceSeconds);
+        if (!r.timed_out && now >= term) {
+            r.timed_out = true;
+            log_warning("{} ran past --timeout {:.0f} s: SIGTERM",
+                        folder.jobs()[r.index].name,
+                        plan.timeout_seconds);
+            kill(-pid, SIGTERM);
         }
-    };
+        if (r.timed_out && now >= kill_at) kill(-pid, SIGKILL);
+        next = std::min(next, r.timed_out ? kill_at : term);
+    }
+    return next;
+}
 
-    const auto finish_job = [&](pid_t pid, int status) {
-        auto it = running.find(pid);
-        if (it == running.end()) return;
-        RunningJob r = std::move(it->second);
-        running.erase(it);
-        const BatchJob& job = folder.jobs()[r.index];
-        const int exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
-        r.state.seconds = std::chrono::duration<double>(Clock::now() - r.start).count();
-        r.state.seconds_total += r.state.seconds;
-        r.state.finished = utc_timestamp();
-        r.state.pid = 0;
-        collect_job_result(folder,
-                           job,
-                           exit_code,
-                           signal,
-                           r.timed_out,
-                           read_from(folder.log_path(job), r.log_offset),
-                           r.state);
-        folder.write_state(job, r.state);
-        account(job, r.index, r.state);
-    };
-
-    // --timeout: SIGTERM at the limit, SIGKILL after the grace; returns the next such moment.
-    const auto enforce_timeouts = [&]() {
-        Clock::time_point next = Clock::time_point::max();
-        if (plan.timeout_seconds <= 0) return next;
-        const Clock::time_point now = Clock::now();
-        for (auto& [pid, r] : running) {
-            const Clock::time_point term = r.start + seconds(plan.timeout_seconds);
-            const Clock::time_point kill_at = term + seconds(kTimeoutGraceSeconds);
-            if (!r.timed_out && now >= term) {
-                r.timed_out = true;
-                log_warning("{} ran past --timeout {:.0f} s: SIGTERM",
-                            folder.jobs()[r.index].name,
-                            plan.timeout_seconds);
-                kill(-pid, SIGTERM);
-            }
-            if (r.timed_out && now >= kill_at) kill(-pid, SIGKILL);
-            next = std::min(next, r.timed_out ? kill_at : term);
-        }
-        return next;
-    };
-
+// Starts jobs up to --parallel and waits for children, timeouts and stop signals until none runs.
+void JobLoop::run(const sigset_t& waited) {
+    const int parallel = std::max(1, plan.parallel);
     while (true) {
         while (!outcome.stopped && !outcome.capped && running.size() < std::size_t(parallel) &&
                !queue.empty()) {
@@ -412,9 +422,20 @@ JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
             for (const auto& [pid, r] : running) kill(-pid, SIGTERM);
         }
     }
-    outcome.not_started += int(queue.size());
+}
+
+}  // namespace
+
+JobRunOutcome run_jobs(const BatchFolder& folder, const JobRunPlan& plan) {
+    sigset_t waited, previous;
+    sigemptyset(&waited);
+    for (int s : {SIGCHLD, SIGTERM, SIGINT, SIGUSR1}) sigaddset(&waited, s);
+    sigprocmask(SIG_BLOCK, &waited, &previous);
+    JobLoop loop(folder, plan);
+    loop.run(waited);
+    loop.outcome.not_started += int(loop.queue.size());
     sigprocmask(SIG_SETMASK, &previous, nullptr);
-    return outcome;
+    return loop.outcome;
 }
 
 }  // namespace tdf

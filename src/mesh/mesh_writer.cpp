@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <tuple>
@@ -31,6 +32,15 @@ void check_writable_mesh(const TriangleMesh& mesh, const std::string& path) {
         throw_error("{}: {} UV faces for {} faces", path, mesh.uv_triangles.size(), mesh.triangles.size());
     if (mesh.has_colors() && mesh.colors.size() != mesh.positions.size())
         throw_error("{}: {} vertex colours for {} vertices", path, mesh.colors.size(), mesh.positions.size());
+}
+
+void check_face_materials(const FaceMaterials& parts, const TriangleMesh& mesh, const std::string& path) {
+    if (parts.empty()) return;
+    if (parts.face_material.size() != mesh.triangles.size())
+        throw_error("{}: {} face materials for {} faces", path, parts.face_material.size(), mesh.triangles.size());
+    for (const int m : parts.face_material)
+        if (m < 0 || std::size_t(m) >= parts.names.size())
+            throw_error("{}: face material {} is not one of the {} materials", path, m, parts.names.size());
 }
 
 }  // namespace
@@ -64,17 +74,24 @@ void write_obj_group_lines(fmt::memory_buffer& out, const TriangleMesh& mesh, st
 
 }  // namespace
 
-void write_obj(const std::string& obj_path, const TriangleMesh& mesh, const ObjMaterial& material) {
+void write_obj(const std::string& obj_path, const TriangleMesh& mesh, const ObjMaterial& material,
+               const FaceMaterials& parts) {
     check_writable_mesh(mesh, obj_path);
+    check_face_materials(parts, mesh, obj_path);
     const fs::path path(obj_path);
     const std::string mtl_name = path.stem().string() + ".mtl";
     const bool has_normals = mesh.normals.size() == mesh.positions.size();
 
-    std::string mtl =
-        fmt::format("# written by tdf\nnewmtl {}\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nillum 1\n", material.name);
-    if (!material.albedo_map.empty()) mtl += fmt::format("map_Kd {}\n", material.albedo_map);
-    if (!material.normal_map.empty())
-        mtl += fmt::format("norm {}\nmap_Bump -bm 1 {}\n", material.normal_map, material.normal_map);
+    std::string mtl = "# written by tdf\n";
+    for (const std::string& name : parts.empty() ? std::vector<std::string>{material.name} : parts.names) {
+        mtl += fmt::format("newmtl {}\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nillum 1\n", name);
+        if (!material.albedo_map.empty()) mtl += fmt::format("map_Kd {}\n", material.albedo_map);
+        if (!material.normal_map.empty())
+            mtl += fmt::format("norm {}\nmap_Bump -bm 1 {}\n", material.normal_map, material.normal_map);
+        if (!material.height_map.empty())
+            mtl += fmt::format("disp -mm {:.9g} {:.9g} {}\n", material.height_base, material.height_gain,
+                               material.height_map);
+    }
     write_text_atomically((path.parent_path() / mtl_name).string(), mtl);
 
     fmt::memory_buffer out;
@@ -107,9 +124,11 @@ void write_obj(const std::string& obj_path, const TriangleMesh& mesh, const ObjM
     if (has_normals)
         for (const Vec3f& n : mesh.normals)
             fmt::format_to(std::back_inserter(out), "vn {:.7g} {:.7g} {:.7g}\n", n.x, n.y, n.z);
-    fmt::format_to(std::back_inserter(out), "usemtl {}\n", material.name);
+    if (parts.empty()) fmt::format_to(std::back_inserter(out), "usemtl {}\n", material.name);
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
         write_obj_group_lines(out, mesh, f);
+        if (!parts.empty() && (f == 0 || parts.face_material[f] != parts.face_material[f - 1]))
+            fmt::format_to(std::back_inserter(out), "usemtl {}\n", parts.names[std::size_t(parts.face_material[f])]);
         const Vec3i& t = mesh.triangles[f];
         const Vec3i u = mesh.has_uvs() ? mesh.uv_triangles[f] : Vec3i{0, 0, 0};
         out.push_back('f');
@@ -214,24 +233,20 @@ struct OutputNode {
     std::string name, mesh_name;
     std::array<double, 16> world_from_node{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     std::vector<std::vector<std::size_t>> primitives;
+    std::vector<int> materials;  ///< per primitive
 };
 
 // The input's structure (TriangleMesh::face_groups): a glTF input gives one node per input node
 // and one primitive per input primitive; an OBJ input one node per (object, group) and one
 // primitive per material. Without groups: one node, one primitive. Order of first appearance.
-std::vector<OutputNode> split_into_nodes(const TriangleMesh& mesh) {
+// With `parts`, a primitive holds one part's faces (its material in OutputNode::materials).
+std::vector<OutputNode> split_into_nodes(const TriangleMesh& mesh, const FaceMaterials& parts) {
     const bool grouped = !mesh.face_groups.empty() && mesh.face_group.size() == mesh.triangles.size();
     std::vector<OutputNode> nodes;
-    if (!grouped) {
-        nodes.emplace_back();
-        nodes[0].primitives.emplace_back(mesh.triangles.size());
-        for (std::size_t f = 0; f < mesh.triangles.size(); ++f) nodes[0].primitives[0][f] = f;
-        return nodes;
-    }
     std::map<std::tuple<int, std::string, std::string>, std::size_t> node_of;
-    std::map<std::pair<std::size_t, std::tuple<int, int, std::string>>, std::size_t> primitive_of;
+    std::map<std::pair<std::size_t, std::tuple<int, int, std::string, int>>, std::size_t> primitive_of;
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-        const int gi = mesh.face_group[f];
+        const int gi = grouped ? mesh.face_group[f] : -1;
         static const FaceGroup kNone;
         const FaceGroup& g =
             gi >= 0 && std::size_t(gi) < mesh.face_groups.size() ? mesh.face_groups[std::size_t(gi)] : kNone;
@@ -247,14 +262,98 @@ std::vector<OutputNode> split_into_nodes(const TriangleMesh& mesh) {
             nodes.push_back(std::move(node));
         }
         OutputNode& node = nodes[node_it->second];
-        const auto primitive_key = gltf ? std::make_tuple(g.gltf_mesh, g.gltf_primitive, std::string())
-                                        : std::make_tuple(-1, -1, g.material);
+        const int part = parts.empty() ? 0 : parts.face_material[f];
+        const auto primitive_key = gltf ? std::make_tuple(g.gltf_mesh, g.gltf_primitive, std::string(), part)
+                                        : std::make_tuple(-1, -1, g.material, part);
         const auto [prim_it, new_primitive] =
             primitive_of.emplace(std::make_pair(node_it->second, primitive_key), node.primitives.size());
-        if (new_primitive) node.primitives.emplace_back();
+        if (new_primitive) {
+            node.primitives.emplace_back();
+            node.materials.push_back(part);
+        }
         node.primitives[prim_it->second].push_back(f);
     }
     return nodes;
+}
+
+// One primitive's vertex arrays in the node's own coordinates.
+struct GlbPrimitive {
+    std::vector<std::uint32_t> indices;
+    std::vector<float> positions, normals, tangents, texcoords, colors;
+    Vec3f lower{0, 0, 0}, upper{0, 0, 0};  // the positions' bounds (glTF requires them)
+};
+
+// Which vertex attributes the file carries.
+struct GlbAttributes {
+    bool normals = false, tangents = false, colors = false;
+};
+
+GlbPrimitive gather_primitive(const TriangleMesh& mesh, const std::vector<std::size_t>& faces, bool mirrored,
+                              const Affine& world_from_node, const Affine& node_from_world,
+                              const GlbAttributes& attributes) {
+    // One glTF vertex per distinct (position, uv, tangent) corner.
+    std::map<std::tuple<int, int, int>, std::uint32_t> vertex_ids;
+    GlbPrimitive out;
+    out.indices.reserve(faces.size() * 3);
+    for (const std::size_t f : faces)
+        for (int j = 0; j < 3; ++j) {
+            const int k = mirrored && j > 0 ? 3 - j : j;
+            const int p = mesh.triangles[f][k];
+            const int t = mesh.has_uvs() ? mesh.uv_triangles[f][k] : -1;
+            const int g = attributes.tangents ? mesh.tangent_triangles[f][k] : -1;
+            const auto [it, inserted] =
+                vertex_ids.emplace(std::make_tuple(p, t, g), std::uint32_t(vertex_ids.size()));
+            out.indices.push_back(it->second);
+            if (!inserted) continue;
+            const Vec3f position = node_from_world.point(mesh.positions[std::size_t(p)]);
+            out.lower = it->second == 0 ? position : min(out.lower, position);
+            out.upper = it->second == 0 ? position : max(out.upper, position);
+            out.positions.insert(out.positions.end(), {position.x, position.y, position.z});
+            if (attributes.normals) {
+                // Normals transform by the inverse transpose: n_node ~ A^T n_world.
+                const Vec3f n = normalize_or_zero(
+                    world_from_node.transposed_direction(mesh.normals[std::size_t(p)]));
+                out.normals.insert(out.normals.end(), {n.x, n.y, n.z});
+            }
+            if (attributes.tangents) {
+                const Vec4f tg = mesh.tangents[std::size_t(g)];
+                const Vec3f d = normalize_or_zero(node_from_world.direction({tg.x, tg.y, tg.z}));
+                // Our handedness is +1 when N x T points toward increasing OBJ v, i.e. toward
+                // decreasing glTF v, which is exactly glTF's bitangent = cross(N, T) * w.
+                // Viewers form that cross product from the transformed N and T, so w stays.
+                out.tangents.insert(out.tangents.end(), {d.x, d.y, d.z, tg.w >= 0.0f ? 1.0f : -1.0f});
+            }
+            if (t >= 0) {
+                const Vec2f uv = mesh.uvs[std::size_t(t)];
+                out.texcoords.insert(out.texcoords.end(), {uv.x, 1.0f - uv.y});  // glTF v points down
+            }
+            if (attributes.colors) {
+                const Vec3f c = mesh.colors[std::size_t(p)];
+                out.colors.insert(out.colors.end(), {c.x, c.y, c.z});
+            }
+        }
+    TDF_CHECK_EQ(out.positions.size(), vertex_ids.size() * 3);
+    return out;
+}
+
+// The GLB container: a 12-byte header, the JSON chunk (padded with spaces to 4 bytes), the BIN chunk.
+void write_glb_container(const std::string& path, std::string json, const std::vector<std::uint8_t>& data) {
+    while (json.size() % 4 != 0) json.push_back(' ');
+    write_atomically(path, [&](const std::string& temporary) {
+        const auto u32 = [](std::size_t v) { return std::uint32_t(v); };
+        const std::uint32_t header[3] = {0x46546C67u, 2u, u32(12 + 8 + json.size() + 8 + data.size())};
+        const std::uint32_t json_chunk[2] = {u32(json.size()), 0x4E4F534Au};
+        const std::uint32_t bin_chunk[2] = {u32(data.size()), 0x004E4942u};
+        std::ofstream out(temporary, std::ios::binary);
+        if (!out) throw_error("cannot open '{}' for writing: {}", path, std::strerror(errno));
+        out.write(reinterpret_cast<const char*>(header), sizeof(header));
+        out.write(reinterpret_cast<const char*>(json_chunk), sizeof(json_chunk));
+        out.write(json.data(), std::streamsize(json.size()));
+        out.write(reinterpret_cast<const char*>(bin_chunk), sizeof(bin_chunk));
+        out.write(reinterpret_cast<const char*>(data.data()), std::streamsize(data.size()));
+        out.flush();
+        if (!out) throw_error("cannot write '{}': {} (disk full?)", path, std::strerror(errno));
+    });
 }
 
 }  // namespace
@@ -286,16 +385,56 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const Image* a
     write_glb(path, mesh, maps);
 }
 
-void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps& maps) {
+namespace {
+
+// The glTF material: dielectric and fully rough (the closest glTF's PBR model comes to tdf's
+// Lambertian shading), the maps' PNGs through `add_image` (which embeds them and returns the image
+// index), the height map and its scale under extras; multi-part, the same material under each
+// part's name (the textures are one shared atlas).
+Json glb_materials(const GlbMaps& maps, const FaceMaterials& parts, Json& textures,
+                   const std::function<std::size_t(const std::string& png, const char* name)>& add_image) {
+    Json pbr = {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}};
+    Json material = {{"name", "material"}};
+    for (const auto& [png, slot] : {std::make_pair(&maps.albedo_png, "baseColorTexture"),
+                                    std::make_pair(&maps.normal_png, "normalTexture")}) {
+        if (png->empty()) continue;
+        textures.push_back({{"source", add_image(*png, nullptr)}, {"sampler", 0}});
+        const Json info = {{"index", textures.size() - 1}};
+        if (std::string(slot) == "baseColorTexture")
+            pbr[slot] = info;
+        else
+            material[slot] = info;
+    }
+    material["pbrMetallicRoughness"] = pbr;
+    if (!maps.height_png.empty()) {
+        Json extras = maps.height_extras;
+        extras["image"] = add_image(maps.height_png, "tdf_height");
+        material["extras"] = {{"tdf_height", extras}};
+    }
+    Json materials = Json::array({material});
+    if (!parts.empty()) {
+        materials = Json::array();
+        for (const std::string& name : parts.names) {
+            material["name"] = name;
+            materials.push_back(material);
+        }
+    }
+    return materials;
+}
+
+}  // namespace
+
+void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps& maps, const FaceMaterials& parts) {
     check_writable_mesh(mesh, path);
+    check_face_materials(parts, mesh, path);
     const bool has_tangents =
         mesh.tangent_triangles.size() == mesh.triangles.size() && !mesh.tangents.empty();
     const bool has_normals = mesh.normals.size() == mesh.positions.size();
     // glTF multiplies COLOR_0 into baseColorTexture; tdf renders the texture alone when a mesh has
     // both (and a baked albedo already holds the colours), so the colours go only without one.
     const bool write_colors = mesh.has_colors() && maps.albedo_png.empty();
+    const GlbAttributes glb_attributes{has_normals, has_tangents, write_colors};
 
-    using Json = nlohmann::json;
     BinaryBuffer bin;
     Json views = Json::array(), accessors = Json::array();
     const auto add_view = [&](std::size_t offset, std::size_t length, int target) {
@@ -314,7 +453,7 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
     };
 
     Json nodes = Json::array(), meshes = Json::array(), scene_nodes = Json::array();
-    for (const OutputNode& node : split_into_nodes(mesh)) {
+    for (const OutputNode& node : split_into_nodes(mesh, parts)) {
         // Positions were loaded in world coordinates (the loader applied the node's matrix): write
         // them back in the node's own coordinates under the same matrix.
         Affine node_from_world;
@@ -327,51 +466,12 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
         // world); glTF's viewers reverse it again for such nodes, so the file keeps the input's order.
         const bool mirrored = world_from_node.determinant() < 0;
         Json primitives = Json::array();
-        for (const std::vector<std::size_t>& faces : node.primitives) {
-            // One glTF vertex per distinct (position, uv, tangent) corner.
-            std::map<std::tuple<int, int, int>, std::uint32_t> vertex_ids;
-            std::vector<std::uint32_t> indices;
-            std::vector<float> positions, normals, tangents, texcoords, colors;
-            Vec3f lower{0, 0, 0}, upper{0, 0, 0};
-            indices.reserve(faces.size() * 3);
-            for (const std::size_t f : faces)
-                for (int j = 0; j < 3; ++j) {
-                    const int k = mirrored && j > 0 ? 3 - j : j;
-                    const int p = mesh.triangles[f][k];
-                    const int t = mesh.has_uvs() ? mesh.uv_triangles[f][k] : -1;
-                    const int g = has_tangents ? mesh.tangent_triangles[f][k] : -1;
-                    const auto [it, inserted] =
-                        vertex_ids.emplace(std::make_tuple(p, t, g), std::uint32_t(vertex_ids.size()));
-                    indices.push_back(it->second);
-                    if (!inserted) continue;
-                    const Vec3f position = node_from_world.point(mesh.positions[std::size_t(p)]);
-                    lower = it->second == 0 ? position : min(lower, position);
-                    upper = it->second == 0 ? position : max(upper, position);
-                    positions.insert(positions.end(), {position.x, position.y, position.z});
-                    if (has_normals) {
-                        // Normals transform by the inverse transpose: n_node ~ A^T n_world.
-                        const Vec3f n = normalize_or_zero(
-                            world_from_node.transposed_direction(mesh.normals[std::size_t(p)]));
-                        normals.insert(normals.end(), {n.x, n.y, n.z});
-                    }
-                    if (has_tangents) {
-                        const Vec4f tg = mesh.tangents[std::size_t(g)];
-                        const Vec3f d = normalize_or_zero(node_from_world.direction({tg.x, tg.y, tg.z}));
-                        // Our handedness is +1 when N x T points toward increasing OBJ v, i.e. toward
-                        // decreasing glTF v, which is exactly glTF's bitangent = cross(N, T) * w.
-                        // Viewers form that cross product from the transformed N and T, so w stays.
-                        tangents.insert(tangents.end(), {d.x, d.y, d.z, tg.w >= 0.0f ? 1.0f : -1.0f});
-                    }
-                    if (t >= 0) {
-                        const Vec2f uv = mesh.uvs[std::size_t(t)];
-                        texcoords.insert(texcoords.end(), {uv.x, 1.0f - uv.y});  // glTF v points down
-                    }
-                    if (write_colors) {
-                        const Vec3f c = mesh.colors[std::size_t(p)];
-                        colors.insert(colors.end(), {c.x, c.y, c.z});
-                    }
-                }
-            TDF_CHECK_EQ(positions.size(), vertex_ids.size() * 3);
+        for (std::size_t primitive = 0; primitive < node.primitives.size(); ++primitive) {
+            const std::vector<std::size_t>& faces = node.primitives[primitive];
+            const GlbPrimitive prim =
+                gather_primitive(mesh, faces, mirrored, world_from_node, node_from_world, glb_attributes);
+            const std::vector<std::uint32_t>& indices = prim.indices;
+            const Vec3f lower = prim.lower, upper = prim.upper;
             Json attributes = Json::object();
             const std::size_t index_view = add_view(bin.append(indices), indices.size() * 4, 34963);
             accessors.push_back({{"bufferView", index_view},
@@ -379,15 +479,15 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
                                  {"count", indices.size()},
                                  {"type", "SCALAR"}});
             const std::size_t index_accessor = accessors.size() - 1;
-            attributes["POSITION"] = add_floats(positions, "VEC3", 3);
+            attributes["POSITION"] = add_floats(prim.positions, "VEC3", 3);
             accessors[attributes["POSITION"].get<std::size_t>()]["min"] = {lower.x, lower.y, lower.z};
             accessors[attributes["POSITION"].get<std::size_t>()]["max"] = {upper.x, upper.y, upper.z};
-            if (has_normals) attributes["NORMAL"] = add_floats(normals, "VEC3", 3);
-            if (has_tangents) attributes["TANGENT"] = add_floats(tangents, "VEC4", 4);
-            if (!texcoords.empty()) attributes["TEXCOORD_0"] = add_floats(texcoords, "VEC2", 2);
-            if (!colors.empty()) attributes["COLOR_0"] = add_floats(colors, "VEC3", 3);
+            if (has_normals) attributes["NORMAL"] = add_floats(prim.normals, "VEC3", 3);
+            if (has_tangents) attributes["TANGENT"] = add_floats(prim.tangents, "VEC4", 4);
+            if (!prim.texcoords.empty()) attributes["TEXCOORD_0"] = add_floats(prim.texcoords, "VEC2", 2);
+            if (!prim.colors.empty()) attributes["COLOR_0"] = add_floats(prim.colors, "VEC3", 3);
             primitives.push_back(
-                {{"attributes", attributes}, {"indices", index_accessor}, {"material", 0}, {"mode", 4}});
+                {{"attributes", attributes}, {"indices", index_accessor}, {"material", node.materials[primitive]}, {"mode", 4}});
         }
         Json mesh_json = {{"primitives", primitives}};
         if (!node.mesh_name.empty()) mesh_json["name"] = node.mesh_name;
@@ -400,54 +500,30 @@ void write_glb(const std::string& path, const TriangleMesh& mesh, const GlbMaps&
     }
 
     Json images = Json::array(), textures = Json::array();
-    // Dielectric and fully rough: the closest glTF's PBR model comes to tdf's Lambertian shading.
-    Json pbr = {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}};
-    Json material = {{"name", "material"}};
-    for (const auto& [png, slot] : {std::make_pair(&maps.albedo_png, "baseColorTexture"),
-                                    std::make_pair(&maps.normal_png, "normalTexture")}) {
-        if (png->empty()) continue;
-        const std::size_t view = add_view(bin.append_bytes(png->data(), png->size()), png->size(), 0);
-        images.push_back({{"bufferView", view}, {"mimeType", "image/png"}});
-        textures.push_back({{"source", images.size() - 1}, {"sampler", 0}});
-        const Json info = {{"index", textures.size() - 1}};
-        if (std::string(slot) == "baseColorTexture")
-            pbr[slot] = info;
-        else
-            material[slot] = info;
-    }
-    material["pbrMetallicRoughness"] = pbr;
+    const auto add_image = [&](const std::string& png, const char* name) {
+        const std::size_t view = add_view(bin.append_bytes(png.data(), png.size()), png.size(), 0);
+        Json image = {{"bufferView", view}, {"mimeType", "image/png"}};
+        if (name) image["name"] = name;
+        images.push_back(image);
+        return images.size() - 1;
+    };
+    const Json materials = glb_materials(maps, parts, textures, add_image);
     Json gltf = {{"asset", {{"version", "2.0"}, {"generator", "tdf"}}},
                  {"scene", 0},
                  {"scenes", Json::array({{{"nodes", scene_nodes}}})},
                  {"nodes", nodes},
                  {"meshes", meshes},
-                 {"materials", Json::array({material})},
+                 {"materials", materials},
                  {"accessors", accessors},
                  {"bufferViews", views},
                  {"buffers", Json::array({{{"byteLength", bin.bytes().size()}}})}};
-    if (!images.empty()) {
-        gltf["images"] = images;
+    if (!images.empty()) gltf["images"] = images;
+    if (!textures.empty()) {
         gltf["textures"] = textures;
         gltf["samplers"] = Json::array({{{"magFilter", 9729}, {"minFilter", 9987}}});
     }
     std::string json = gltf.dump();
-    while (json.size() % 4 != 0) json.push_back(' ');
-    const std::vector<std::uint8_t>& data = bin.bytes();
-    write_atomically(path, [&](const std::string& temporary) {
-        const auto u32 = [](std::size_t v) { return std::uint32_t(v); };
-        const std::uint32_t header[3] = {0x46546C67u, 2u, u32(12 + 8 + json.size() + 8 + data.size())};
-        const std::uint32_t json_chunk[2] = {u32(json.size()), 0x4E4F534Au};
-        const std::uint32_t bin_chunk[2] = {u32(data.size()), 0x004E4942u};
-        std::ofstream out(temporary, std::ios::binary);
-        if (!out) throw_error("cannot open '{}' for writing: {}", path, std::strerror(errno));
-        out.write(reinterpret_cast<const char*>(header), sizeof(header));
-        out.write(reinterpret_cast<const char*>(json_chunk), sizeof(json_chunk));
-        out.write(json.data(), std::streamsize(json.size()));
-        out.write(reinterpret_cast<const char*>(bin_chunk), sizeof(bin_chunk));
-        out.write(reinterpret_cast<const char*>(data.data()), std::streamsize(data.size()));
-        out.flush();
-        if (!out) throw_error("cannot write '{}': {} (disk full?)", path, std::strerror(errno));
-    });
+    write_glb_container(path, std::move(json), bin.bytes());
 }
 
 }  // namespace tdf

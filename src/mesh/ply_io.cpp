@@ -155,11 +155,14 @@ int find_any(const PlyElement& e, std::initializer_list<const char*> names) {
     return -1;
 }
 
-}  // namespace
+// The header: lines up to "end_header", its elements and format, and where the body starts.
+struct PlyHeader {
+    std::vector<PlyElement> elements;
+    PlyFormat format = PlyFormat::Ascii;
+    std::size_t body = 0;
+};
 
-TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
-    const std::string data = read_text_file(path);
-    // Header: lines up to "end_header".
+PlyHeader parse_ply_header(const std::string& data, const std::string& path) {
     if (data.compare(0, 3, "ply") != 0)
         throw_error("{}: not a PLY file (it does not start with 'ply')", path);
     const std::size_t header_end = data.find("end_header");
@@ -167,8 +170,9 @@ TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
     std::size_t body = data.find('\n', header_end);
     body = body == std::string::npos ? data.size() : body + 1;
     std::istringstream header(data.substr(0, header_end));
-    std::vector<PlyElement> elements;
-    PlyFormat format = PlyFormat::Ascii;
+    PlyHeader result;
+    std::vector<PlyElement>& elements = result.elements;
+    PlyFormat& format = result.format;
     bool have_format = false;
     std::string line;
     std::size_t line_number = 0;
@@ -231,12 +235,21 @@ TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
         }
     }
     if (!have_format) throw_error("{}: PLY header has no 'format' line", path);
+    result.body = body;
+    return result;
+}
 
+}  // namespace
+
+TriangleMesh load_ply(const std::string& path, const MeshLoadOptions& options) {
+    const std::string data = read_text_file(path);
+    const PlyHeader header = parse_ply_header(data, path);
+    const std::vector<PlyElement>& elements = header.elements;
     TriangleMesh mesh;
     mesh.source_path = path;
     std::vector<Vec2f> vertex_uvs;
     bool corner_uvs = false;
-    PlyReader reader(data, body, format, path);
+    PlyReader reader(data, header.body, header.format, path);
     bool have_vertices = false, have_faces = false;
     for (const PlyElement& e : elements) {
         const bool is_vertex = e.name == "vertex", is_face = e.name == "face";

@@ -31,16 +31,24 @@ std::string replace_all(std::string text, const std::string& from, const std::st
     return text;
 }
 
-}  // namespace
+// The `external` source's settings (docs/parts-protocol.md "Configuration"), checked.
+struct ExternalCall {
+    std::vector<std::string> argv;
+    bool shell = false;
+    double timeout = 600.0;
+    int views = 8, resolution = 512;
+    float radius = 3.f, fovy = 50.f;
+    std::vector<float> elevations;
+    bool keep_files = false;
+};
 
-std::vector<int> run_external_segmentation(const Json& config, const ExternalSegmentationInput& input) {
-    const std::string& where = input.where;
-    if (!input.mesh || !input.material) throw_error("{}: no mesh", where);
+ExternalCall read_external_call(const Json& config, const std::string& where) {
+    ExternalCall call;
     ConfigReader reader(config, where);
     if (!reader.has("command")) throw_error("{}: 'command' is required", where);
     const Json& command = reader.raw("command");
-    const bool shell = reader.get<bool>("shell", false);
-    std::vector<std::string> argv;
+    const bool shell = call.shell = reader.get<bool>("shell", false);
+    std::vector<std::string>& argv = call.argv;
     if (command.is_string()) {
         if (shell) {
             argv = {command.get<std::string>()};
@@ -57,20 +65,103 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
         throw_error("{}: 'command' must be a string, or an array of strings without 'shell'", where);
     }
     if (argv.empty() || argv[0].empty()) throw_error("{}: 'command' is empty", where);
-    const double timeout = reader.get<double>("timeout_seconds", 600.0);
-    const int views = reader.get<int>("views", 8);
-    const int resolution = reader.get<int>("resolution", 512);
-    const float radius = reader.get<float>("radius", 3.f);
-    const float fovy = reader.get<float>("fovy", 50.f);
-    const std::vector<float> elevations = reader.get<std::vector<float>>("elevations", {-20.f, 20.f});
-    const bool keep_files = reader.get<bool>("keep_files", false);
+    const double timeout = call.timeout = reader.get<double>("timeout_seconds", 600.0);
+    const int views = call.views = reader.get<int>("views", 8);
+    const int resolution = call.resolution = reader.get<int>("resolution", 512);
+    call.radius = reader.get<float>("radius", 3.f);
+    call.fovy = reader.get<float>("fovy", 50.f);
+    call.elevations = reader.get<std::vector<float>>("elevations", {-20.f, 20.f});
+    call.keep_files = reader.get<bool>("keep_files", false);
     reader.check_all_read();
     if (!(timeout > 0)) throw_error("{}: 'timeout_seconds' must be positive", where);
     if (views < 1 || views > 256) throw_error("{}: 'views' must be in [1, 256], got {}", where, views);
     if (resolution < 16 || resolution > 4096)
         throw_error("{}: 'resolution' must be in [16, 4096], got {}", where, resolution);
-    if (elevations.empty()) throw_error("{}: 'elevations' is empty", where);
+    if (call.elevations.empty()) throw_error("{}: 'elevations' is empty", where);
 
+    return call;
+}
+
+// Votes per face and part: every pixel a view sees, in the part whose mask is strongest there
+// (> 0.5), read from the program's part_<view>_<part>.png.
+std::vector<float> read_votes(const std::vector<GBuffer>& buffers, std::size_t face_count, std::size_t part_count,
+                              int resolution, const std::string& folder, const std::string& where) {
+    const int views = int(buffers.size());
+    std::vector<float> votes(face_count * part_count, 0.f);
+    for (int k = 0; k < views; ++k) {
+        const GBuffer& g = buffers[std::size_t(k)];
+        std::vector<Image> masks;
+        for (std::size_t p = 0; p < part_count; ++p) {
+            const std::string file = fmt::format("{}/part_{}_{}.png", folder, k, p);
+            if (!fs::exists(file))
+                throw_error("{}: the program did not write {} (files kept in {})", where, file, folder);
+            Image m = read_image(file);
+            if (m.width() != resolution || m.height() != resolution)
+                throw_error("{}: {} is {}x{}, expected {}x{}",
+                            where,
+                            file,
+                            m.width(),
+                            m.height(),
+                            resolution,
+                            resolution);
+            masks.push_back(std::move(m));
+        }
+        for (int y = 0; y < resolution; ++y)
+            for (int x = 0; x < resolution; ++x) {
+                const std::size_t i = g.index(x, y);
+                if (g.triangle[i] < 0) continue;
+                int best = -1;
+                float best_v = 0.5f;
+                for (std::size_t p = 0; p < part_count; ++p) {
+                    const float v = masks[p].at(x, y, 0);
+                    if (!std::isfinite(v))
+                        throw_error("{}: part_{}_{}.png has a non-finite value", where, k, p);
+                    if (v > best_v) {
+                        best_v = v;
+                        best = int(p);
+                    }
+                }
+                if (best >= 0) votes[std::size_t(g.triangle[i]) * part_count + std::size_t(best)] += 1.f;
+            }
+    }
+    return votes;
+}
+
+// Unseen faces (label -1) take their neighbours' part, repeatedly; any still unlabelled get part 0.
+void fill_unseen_faces(std::vector<int>& label, const std::vector<std::vector<std::pair<int, float>>>& adjacency,
+                       std::size_t part_count) {
+    for (bool changed = true; changed;) {
+        changed = false;
+        std::vector<int> next(label);
+        for (std::size_t f = 0; f < label.size(); ++f) {
+            if (label[f] >= 0) continue;
+            std::vector<float> v(part_count, 0.f);
+            for (const auto& [g, w] : adjacency[f])
+                if (label[std::size_t(g)] >= 0) v[std::size_t(label[std::size_t(g)])] += w;
+            const auto best = std::max_element(v.begin(), v.end());
+            if (*best > 0) {
+                next[f] = int(best - v.begin());
+                changed = true;
+            }
+        }
+        label.swap(next);
+    }
+    for (int& l : label)
+        if (l < 0) l = 0;
+}
+
+}  // namespace
+
+std::vector<int> run_external_segmentation(const Json& config, const ExternalSegmentationInput& input) {
+    const std::string& where = input.where;
+    if (!input.mesh || !input.material) throw_error("{}: no mesh", where);
+    const ExternalCall call = read_external_call(config, where);
+    std::vector<std::string> argv = call.argv;
+    const bool shell = call.shell;
+    const double timeout = call.timeout;
+    const int views = call.views, resolution = call.resolution;
+    const float radius = call.radius, fovy = call.fovy;
+    const std::vector<float>& elevations = call.elevations;
     const std::string parent =
         input.work_folder.empty() ? fs::temp_directory_path().string() : input.work_folder;
     const std::string folder =
@@ -155,45 +246,8 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
                     file_tail(folder + "/stderr.txt", 1),
                     folder);
 
-    // Votes: every pixel a view sees, in the part whose mask is strongest there (> 0.5).
     const std::size_t part_count = input.part_names.size();
-    std::vector<float> votes(mesh.triangles.size() * part_count, 0.f);
-    for (int k = 0; k < views; ++k) {
-        const GBuffer& g = buffers[std::size_t(k)];
-        std::vector<Image> masks;
-        for (std::size_t p = 0; p < part_count; ++p) {
-            const std::string file = fmt::format("{}/part_{}_{}.png", folder, k, p);
-            if (!fs::exists(file))
-                throw_error("{}: the program did not write {} (files kept in {})", where, file, folder);
-            Image m = read_image(file);
-            if (m.width() != resolution || m.height() != resolution)
-                throw_error("{}: {} is {}x{}, expected {}x{}",
-                            where,
-                            file,
-                            m.width(),
-                            m.height(),
-                            resolution,
-                            resolution);
-            masks.push_back(std::move(m));
-        }
-        for (int y = 0; y < resolution; ++y)
-            for (int x = 0; x < resolution; ++x) {
-                const std::size_t i = g.index(x, y);
-                if (g.triangle[i] < 0) continue;
-                int best = -1;
-                float best_v = 0.5f;
-                for (std::size_t p = 0; p < part_count; ++p) {
-                    const float v = masks[p].at(x, y, 0);
-                    if (!std::isfinite(v))
-                        throw_error("{}: part_{}_{}.png has a non-finite value", where, k, p);
-                    if (v > best_v) {
-                        best_v = v;
-                        best = int(p);
-                    }
-                }
-                if (best >= 0) votes[std::size_t(g.triangle[i]) * part_count + std::size_t(best)] += 1.f;
-            }
-    }
+    const std::vector<float> votes = read_votes(buffers, mesh.triangles.size(), part_count, resolution, folder, where);
     std::vector<int> label(mesh.triangles.size(), -1);
     std::size_t seen = 0;
     for (std::size_t f = 0; f < label.size(); ++f) {
@@ -207,24 +261,7 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
     if (seen == 0) throw_error("{}: the masks cover no visible face (files kept in {})", where, folder);
     const auto adjacency = face_adjacency(mesh);
     // Unseen faces take their neighbours' part, then a few rounds of majority smoothing.
-    for (bool changed = true; changed;) {
-        changed = false;
-        std::vector<int> next(label);
-        for (std::size_t f = 0; f < label.size(); ++f) {
-            if (label[f] >= 0) continue;
-            std::vector<float> v(part_count, 0.f);
-            for (const auto& [g, w] : adjacency[f])
-                if (label[std::size_t(g)] >= 0) v[std::size_t(label[std::size_t(g)])] += w;
-            const auto best = std::max_element(v.begin(), v.end());
-            if (*best > 0) {
-                next[f] = int(best - v.begin());
-                changed = true;
-            }
-        }
-        label.swap(next);
-    }
-    for (int& l : label)
-        if (l < 0) l = 0;
+    fill_unseen_faces(label, adjacency, part_count);
     majority_smooth(label, adjacency, input.smoothing);
     log_info("{}: {} of {} faces seen in {} views ({:.1f} s in the program)",
              where,
@@ -232,7 +269,7 @@ std::vector<int> run_external_segmentation(const Json& config, const ExternalSeg
              label.size(),
              views,
              outcome.seconds);
-    if (!keep_files) fs::remove_all(folder);
+    if (!call.keep_files) fs::remove_all(folder);
     return label;
 }
 

@@ -244,6 +244,124 @@ SourceRegions colour_regions(const PartsSpec& spec, const PartSegmentationInput&
     return r;
 }
 
+// Each texel's surface area: its face's 3-D area divided by the face's texel count, so atlases
+// of uneven density report true areas (region sizes for messages and the report).
+std::vector<double> texel_surface_area(const TriangleMesh& mesh, const UvRaster& raster) {
+    std::vector<double> texel_area(raster.texel_count(), 0.0);
+    std::vector<std::size_t> face_texels(mesh.triangles.size(), 0);
+    for (int f : raster.triangle)
+        if (f >= 0) ++face_texels[std::size_t(f)];
+    for (std::size_t i = 0; i < texel_area.size(); ++i) {
+        const int f = raster.triangle[i];
+        if (f < 0) continue;
+        const Vec3i& t = mesh.triangles[std::size_t(f)];
+        const Vec3f p0 = mesh.positions[std::size_t(t.x)];
+        const double area = 0.5 * double(length(cross(mesh.positions[std::size_t(t.y)] - p0,
+                                                      mesh.positions[std::size_t(t.z)] - p0)));
+        texel_area[i] = area / double(face_texels[std::size_t(f)]);
+    }
+    return texel_area;
+}
+
+// The `external` source: the program's faces, regions named by their index.
+SourceRegions external_regions(const PartsSpec& spec, const PartSegmentationInput& in, const std::string& where) {
+    SourceRegions src;
+    ExternalSegmentationInput ext;
+    ext.mesh = in.mesh;
+    ext.material = in.material;
+    ext.work_folder = in.work_folder;
+    ext.where = where + ".source.external";
+    ext.smoothing = spec.source.smoothing;
+    ext.part_names.reserve(spec.parts.size());
+    for (const PartSpec& p : spec.parts) ext.part_names.push_back(p.name);
+    for (const PartSpec& p : spec.parts) ext.prompts.push_back(p.prompt);
+    const std::vector<int> face = run_external_segmentation(spec.source.external, ext);
+    src.face = face;
+    int top = 0;
+    for (int l : face) top = std::max(top, l + 1);
+    for (int r = 0; r < top; ++r) src.names.push_back(std::to_string(r));
+    return src;
+}
+
+// Regions -> parts when parts name their regions ('select'): the named ones, then the rest to the
+// part without 'select' (or, for a label image's anti-aliased edge colours, the nearest selected
+// colour); `region_fraction` is each region's share of the covered surface.
+void select_regions(const PartsSpec& spec, const SourceRegions& src, int catch_all,
+                    const std::vector<double>& region_fraction, std::vector<int>& region_part,
+                    const std::string& where) {
+    const std::string& kind = spec.source.kind;
+    const std::size_t parts = spec.parts.size();
+    const auto fraction = [&](std::size_t r) { return region_fraction[r]; };
+    for (std::size_t p = 0; p < parts; ++p)
+        for (const std::string& s : spec.parts[p].select) {
+            std::string wanted = s;
+            if (kind == "label_image")
+                std::transform(wanted.begin(), wanted.end(), wanted.begin(), [](unsigned char c) {
+                    return char(std::tolower(c));
+                });
+            const auto it = std::find(src.names.begin(), src.names.end(), wanted);
+            if (it == src.names.end())
+                throw_error("{}.list[{}].select: '{}' is not a region of the {} source (found: {})",
+                            where,
+                            p,
+                            s,
+                            kind,
+                            list_names(src.names));
+            region_part[std::size_t(it - src.names.begin())] = int(p);
+        }
+    for (std::size_t r = 0; r < src.names.size(); ++r) {
+        if (region_part[r] >= 0) continue;
+        if (catch_all >= 0) {
+            region_part[r] = catch_all;
+        } else if (kind == "label_image" && fraction(r) < 0.005) {
+            // Anti-aliased edge colours of a painted label image: the nearest selected colour.
+            float best = 1e30f;
+            for (std::size_t q = 0; q < src.names.size(); ++q) {
+                if (region_part[q] < 0) continue;
+                const float d = length_squared(src.info[q].rgb - src.info[r].rgb);
+                if (d < best && fraction(q) >= 0.005) {
+                    best = d;
+                    region_part[r] = region_part[q];
+                }
+            }
+            if (region_part[r] < 0)
+                throw_error("{}: region '{}' is selected by no part", where, src.names[r]);
+        } else {
+            throw_error(
+                "{}: region '{}' ({:.1f} % of the surface) is selected by no part; select it or leave "
+                "one "
+                "part without 'select' to take the rest",
+                where,
+                src.names[r],
+                100.0 * fraction(r));
+        }
+    }
+}
+
+// Each part's share of the covered surface; a part without faces or texels is an error.
+void measure_part_fractions(PartSegmentation& out, const std::vector<double>& texel_area, double covered,
+                            const PartsSpec& spec, const std::string& where) {
+    const std::size_t parts = spec.parts.size();
+    out.part_fraction.assign(parts, 0.0);
+    std::vector<std::size_t> part_faces(parts, 0), part_texels(parts, 0);
+    for (int l : out.face_part) ++part_faces[std::size_t(l)];
+    std::vector<double> part_area(parts, 0.0);
+    for (std::size_t i = 0; i < out.texel_part.size(); ++i)
+        if (out.texel_part[i] >= 0) {
+            ++part_texels[std::size_t(out.texel_part[i])];
+            part_area[std::size_t(out.texel_part[i])] += texel_area[i];
+        }
+    for (std::size_t p = 0; p < parts; ++p) {
+        if (part_faces[p] == 0 || part_texels[p] == 0)
+            throw_error("{}.list[{}]: part '{}' has no faces{} (check its 'select' with `tdf parts`)",
+                        where,
+                        p,
+                        spec.parts[p].name,
+                        part_faces[p] == 0 ? "" : " large enough to cover a texel");
+        out.part_fraction[p] = covered > 0 ? part_area[p] / covered : 0.0;
+    }
+}
+
 }  // namespace
 
 Vec3f albedo_at(const TriangleMesh& mesh, const SurfaceMaterial& material, int face, Vec3f b) {
@@ -405,8 +523,7 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
     const std::string where = in.where.empty() ? std::string("parts") : in.where;
     if (!in.mesh || !in.atlas || !in.material)
         throw_error("{}: segment_parts needs a mesh, an atlas and a material", where);
-    if (spec.parts.size() < 2)
-        throw_error("{}: at least 2 parts are needed, got {}", where, spec.parts.size());
+    if (spec.parts.empty()) throw_error("{}: at least 1 part is needed", where);
     if (in.atlas->triangles.size() != in.mesh->triangles.size())
         throw_error("{}: the atlas has {} faces but the mesh {}",
                     where,
@@ -417,26 +534,14 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
     UvRaster raster = rasterize_uv(*in.atlas, in.size);
     add_partial_texels(*in.atlas, raster);
 
-    // Region sizes as surface area (for messages and the report): each texel carries its face's
-    // 3-D area divided by the face's texel count, so atlases of uneven density report true areas.
-    std::vector<double> texel_area(raster.texel_count(), 0.0);
-    {
-        std::vector<std::size_t> face_texels(in.mesh->triangles.size(), 0);
-        for (int f : raster.triangle)
-            if (f >= 0) ++face_texels[std::size_t(f)];
-        for (std::size_t i = 0; i < texel_area.size(); ++i) {
-            const int f = raster.triangle[i];
-            if (f < 0) continue;
-            const Vec3i& t = in.mesh->triangles[std::size_t(f)];
-            const Vec3f p0 = in.mesh->positions[std::size_t(t.x)];
-            const double area = 0.5 * double(length(cross(in.mesh->positions[std::size_t(t.y)] - p0,
-                                                          in.mesh->positions[std::size_t(t.z)] - p0)));
-            texel_area[i] = area / double(face_texels[std::size_t(f)]);
-        }
-    }
+    const std::vector<double> texel_area = texel_surface_area(*in.mesh, raster);
     SourceRegions src;
     const std::string& kind = spec.source.kind;
-    if (kind == "mesh") {
+    if (spec.parts.size() == 1) {
+        // One part is the whole surface: there is nothing to tell apart, so the source is not read.
+        src.names = {"surface"};
+        src.face.assign(in.mesh->triangles.size(), 0);
+    } else if (kind == "mesh") {
         src = mesh_regions(spec, *in.mesh, where);
     } else if (kind == "face_labels") {
         src = face_label_regions(spec, *in.mesh, where);
@@ -445,20 +550,7 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
     } else if (kind == "colour") {
         src = colour_regions(spec, in, raster, texel_area, where);
     } else if (kind == "external") {
-        ExternalSegmentationInput ext;
-        ext.mesh = in.mesh;
-        ext.material = in.material;
-        ext.work_folder = in.work_folder;
-        ext.where = where + ".source.external";
-        ext.smoothing = spec.source.smoothing;
-        ext.part_names.reserve(spec.parts.size());
-        for (const PartSpec& p : spec.parts) ext.part_names.push_back(p.name);
-        for (const PartSpec& p : spec.parts) ext.prompts.push_back(p.prompt);
-        const std::vector<int> face = run_external_segmentation(spec.source.external, ext);
-        src.face = face;
-        int top = 0;
-        for (int l : face) top = std::max(top, l + 1);
-        for (int r = 0; r < top; ++r) src.names.push_back(std::to_string(r));
+        src = external_regions(spec, in, where);
     } else {
         throw_error("{}.source: unknown kind '{}'", where, kind);
     }
@@ -499,50 +591,9 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
                 parts);
         for (std::size_t r = 0; r < parts; ++r) region_part[r] = int(r);
     } else {
-        for (std::size_t p = 0; p < parts; ++p)
-            for (const std::string& s : spec.parts[p].select) {
-                std::string wanted = s;
-                if (kind == "label_image")
-                    std::transform(wanted.begin(), wanted.end(), wanted.begin(), [](unsigned char c) {
-                        return char(std::tolower(c));
-                    });
-                const auto it = std::find(src.names.begin(), src.names.end(), wanted);
-                if (it == src.names.end())
-                    throw_error("{}.list[{}].select: '{}' is not a region of the {} source (found: {})",
-                                where,
-                                p,
-                                s,
-                                kind,
-                                list_names(src.names));
-                region_part[std::size_t(it - src.names.begin())] = int(p);
-            }
-        for (std::size_t r = 0; r < src.names.size(); ++r) {
-            if (region_part[r] >= 0) continue;
-            if (catch_all >= 0) {
-                region_part[r] = catch_all;
-            } else if (kind == "label_image" && fraction(r) < 0.005) {
-                // Anti-aliased edge colours of a painted label image: the nearest selected colour.
-                float best = 1e30f;
-                for (std::size_t q = 0; q < src.names.size(); ++q) {
-                    if (region_part[q] < 0) continue;
-                    const float d = length_squared(src.info[q].rgb - src.info[r].rgb);
-                    if (d < best && fraction(q) >= 0.005) {
-                        best = d;
-                        region_part[r] = region_part[q];
-                    }
-                }
-                if (region_part[r] < 0)
-                    throw_error("{}: region '{}' is selected by no part", where, src.names[r]);
-            } else {
-                throw_error(
-                    "{}: region '{}' ({:.1f} % of the surface) is selected by no part; select it or leave "
-                    "one "
-                    "part without 'select' to take the rest",
-                    where,
-                    src.names[r],
-                    100.0 * fraction(r));
-            }
-        }
+        std::vector<double> region_fraction(src.names.size());
+        for (std::size_t r = 0; r < region_fraction.size(); ++r) region_fraction[r] = fraction(r);
+        select_regions(spec, src, catch_all, region_fraction, region_part, where);
     }
 
     PartSegmentation out;
@@ -565,24 +616,7 @@ PartSegmentation segment_parts(const PartsSpec& spec, const PartSegmentationInpu
             if (l < 0) l = catch_all >= 0 ? catch_all : 0;
         out.texel_part = texel_labels_from_faces(raster, out.face_part);
     }
-    out.part_fraction.assign(parts, 0.0);
-    std::vector<std::size_t> part_faces(parts, 0), part_texels(parts, 0);
-    for (int l : out.face_part) ++part_faces[std::size_t(l)];
-    std::vector<double> part_area(parts, 0.0);
-    for (std::size_t i = 0; i < out.texel_part.size(); ++i)
-        if (out.texel_part[i] >= 0) {
-            ++part_texels[std::size_t(out.texel_part[i])];
-            part_area[std::size_t(out.texel_part[i])] += texel_area[i];
-        }
-    for (std::size_t p = 0; p < parts; ++p) {
-        if (part_faces[p] == 0 || part_texels[p] == 0)
-            throw_error("{}.list[{}]: part '{}' has no faces{} (check its 'select' with `tdf parts`)",
-                        where,
-                        p,
-                        spec.parts[p].name,
-                        part_faces[p] == 0 ? "" : " large enough to cover a texel");
-        out.part_fraction[p] = covered > 0 ? part_area[p] / covered : 0.0;
-    }
+    measure_part_fractions(out, texel_area, covered, spec, where);
     for (std::size_t r = 0; r < src.names.size(); ++r) {
         PartRegion info = src.info[r];
         info.name = src.names[r];

@@ -224,6 +224,7 @@ PartBoundaryMeasure measure_part_boundary(const Image& composed, const std::vect
         return std::sqrt(double(n.x) * n.x + double(n.y) * n.y) / std::max(double(n.z), 1e-3);
     };
     PartBoundaryMeasure m;
+    m.part_bleed_texels.assign(layers.size(), 0.0);
     double boundary_sum = 0, material_sum = 0, interior_sum = 0, detail_sum = 0, detail_reference = 0;
     std::size_t interior_pairs = 0;
     for (int y = 0; y < size; ++y)
@@ -232,8 +233,11 @@ PartBoundaryMeasure measure_part_boundary(const Image& composed, const std::vect
             const int own = labels[i];
             if (own < 0) continue;
             const Vec3f n = texel3(composed, i);
-            if (angle_degrees(n, texel3(layers[std::size_t(own)], i)) > tolerance_degrees)
-                m.bleed_texels = std::max(m.bleed_texels, double(other[i] >= 0 ? distance[i] : 1e9f));
+            if (angle_degrees(n, texel3(layers[std::size_t(own)], i)) > tolerance_degrees) {
+                double& bleed = m.part_bleed_texels[std::size_t(own)];
+                bleed = std::max(bleed, double(other[i] >= 0 ? distance[i] : 1e9f));
+                m.bleed_texels = std::max(m.bleed_texels, bleed);
+            }
             if (other[i] >= 0 && distance[i] <= band + 0.5f) {
                 detail_sum += slope(n);
                 detail_reference += 0.5 * (slope(texel3(layers[std::size_t(own)], i)) +

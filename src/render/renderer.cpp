@@ -8,6 +8,8 @@
 #include <tdf/render/trace.h>
 #include <tdf/scene/view_sampler.h>
 
+#include <tdf/render/shade_lanes.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -64,6 +66,40 @@ struct Targets {
         float* b = base[std::size_t(p)];
         return b ? b + pixel * std::size_t(channels[std::size_t(p)]) : nullptr;
     }
+
+    // The same passes over a w x h tile in `scratch` (resized when needed, row-major like the
+    // images). Shading writes a tile there and flush() copies it out one pass at a time: ten
+    // interleaved streams into ten full-size images evict each other (the images lie at equal
+    // offsets modulo the page size), one copy per pass does not.
+    Targets tile(std::vector<float>& scratch, std::size_t pixels) const {
+        std::size_t size = pixels;  // coverage
+        for (std::size_t p = 0; p < kPassCount; ++p)
+            if (base[p]) size += pixels * std::size_t(channels[p]);
+        if (scratch.size() < size) scratch.resize(size);
+        Targets t = *this;
+        float* next = scratch.data();
+        t.coverage = next;
+        next += pixels;
+        for (std::size_t p = 0; p < kPassCount; ++p)
+            if (base[p]) {
+                t.base[p] = next;
+                next += pixels * std::size_t(channels[p]);
+            }
+        return t;
+    }
+
+    // Copies tile `t` (w x h, pixel (0, 0) at image pixel (x0, y0)) into these images.
+    void flush(const Targets& t, int image_width, int x0, int y0, int w, int h) const {
+        const auto copy = [&](float* image, const float* tile, std::size_t c) {
+            for (int r = 0; r < h; ++r)
+                std::copy_n(tile + std::size_t(r) * std::size_t(w) * c,
+                            std::size_t(w) * c,
+                            image + (std::size_t(y0 + r) * std::size_t(image_width) + std::size_t(x0)) * c);
+        };
+        copy(coverage, t.coverage, 1);
+        for (std::size_t p = 0; p < kPassCount; ++p)
+            if (base[p]) copy(base[p], t.base[p], std::size_t(channels[p]));
+    }
 };
 
 inline void put3(float* out, Vec3f v) {
@@ -110,9 +146,6 @@ public:
                const Camera& camera, const Light& light, const Targets& targets)
         : m_mesh(mesh),
           m_mat(material),
-          m_camera(camera),
-          m_light(light),
-          m_targets(targets),
           m_background(settings.background),
           m_color_space(settings.color_space),
           m_training(settings.shading == ShadingMode::Training),
@@ -123,83 +156,130 @@ public:
                        targets.base[std::size_t(Pass::ShadingNormalViewspace)] ||
                        targets.base[std::size_t(Pass::TactileNormal)]),
           m_need_albedo(targets.base[std::size_t(Pass::Albedo)] ||
-                        targets.base[std::size_t(Pass::Lambertian)]) {}
+                        targets.base[std::size_t(Pass::Lambertian)]),
+          m_tactile_scale(material.tactile_layout.uv_scale),
+          m_tactile_lod_offset(std::log2(m_tactile_scale)),
+          m_paired_maps(m_training && material.albedo_source == SurfaceMaterial::AlbedoSource::Texture &&
+                        material.tactile && m_tactile_scale == 1.f &&
+                        material.albedo->width() == material.tactile->width() &&
+                        material.albedo->height() == material.tactile->height()) {
+        m_lane_constants.training = m_training;
+        m_lane_constants.view = {camera.right, camera.up, camera.back};
+        m_lane_constants.point_light = light.kind == Light::Kind::Point;
+        m_lane_constants.light_vector = light.vector;
+        m_lane_constants.ambient = light.ambient;
+    }
 
-    // Shades tile `g` whose pixel (0, 0) is image pixel (x0, y0).
-    void shade(const GBuffer& g, int x0, int y0) const {
-        using Source = SurfaceMaterial::AlbedoSource;
-        const int x1 = x0 + g.width, y1 = y0 + g.height;
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                const std::size_t i = g.index(x - x0, y - y0);
-                const std::size_t px = std::size_t(y) * std::size_t(m_camera.width) + std::size_t(x);
-                const bool hit = g.mask[i] > 0.f;
-                PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
-                m_targets.coverage[px] = g.mask[i];
-                if (float* o = m_targets.at(Pass::Mask, px)) o[0] = g.mask[i];
-                if (float* o = m_targets.at(Pass::Depth, px)) o[0] = g.depth[i];
-                if (float* o = m_targets.at(Pass::Normal, px)) put3(o, g.normal[i]);
-                if (float* o = m_targets.at(Pass::Tangent, px)) put3(o, g.tangent[i]);
-                if (float* o = m_targets.at(Pass::Uv, px)) {
-                    o[0] = hit ? g.uv[i].x : 0.f;
-                    o[1] = hit ? 1.f - g.uv[i].y : 0.f;  // the reference's v' (spec 3.9)
-                }
-                if (float* o = m_targets.at(Pass::Label, px))
-                    put3(o,
-                         hit && m_mat.label
-                             ? sample_rgb(*m_mat.label, g.uv[i], lod, true, m_tactile_max_level)
-                             : Vec3f{});
-                Vec3f albedo = m_background;
-                if (m_need_albedo && hit) {
-                    if (m_mat.albedo_source == Source::Texture)
-                        albedo = sample_rgb(*m_mat.albedo, g.uv[i], lod, m_albedo_mipmapped, -1);
-                    else if (m_mat.albedo_source == Source::VertexColors)
-                        albedo = vertex_color_at(m_mesh, g, i);
-                    else
-                        albedo = m_mat.albedo_constant;
-                }
-                if (float* o = m_targets.at(Pass::Albedo, px)) put3(o, albedo);
-                if (!m_need_frame) continue;
-                if (!hit) {
-                    for (Pass p : {Pass::TactileNormal, Pass::ShadingNormal, Pass::ShadingNormalViewspace})
-                        if (float* o = m_targets.at(p, px)) put3(o, {});
-                    if (float* o = m_targets.at(Pass::Lambertian, px)) put3(o, m_background);
-                    continue;
-                }
-                Vec3f p{0, 0, 1};
-                if (m_mat.tactile) {
-                    float texel[kMaxTextureChannels];
-                    // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
-                    const float scale = m_mat.tactile_layout.uv_scale;
-                    m_mat.tactile->sample_trilinear_at(g.uv[i] * scale, lod.of(*m_mat.tactile) + std::log2(scale),
-                                                       texel, m_tactile_max_level);
-                    p = {texel[0], texel[1], texel[2]};
-                    if (m_training) p = safe_normalize(p);  // spec 3.1 step 5
-                }
-                if (float* o = m_targets.at(Pass::TactileNormal, px)) put3(o, p);
-                const Vec3f raw = shading_normal_unnormalized(g.tangent[i], g.normal[i], g.handedness[i], p);
-                const Vec3f n = safe_normalize(raw);
-                if (float* o = m_targets.at(Pass::ShadingNormal, px)) put3(o, n);
-                if (float* o = m_targets.at(Pass::ShadingNormalViewspace, px))
-                    put3(o,
-                         m_training ? normalize_or_zero(m_camera.world_to_camera_direction(n))
-                                    : m_camera.world_to_camera_direction(raw));
-                if (float* o = m_targets.at(Pass::Lambertian, px)) {
-                    const Vec3f l = m_light.kind == Light::Kind::Point
-                                        ? safe_normalize(m_light.vector - g.position[i])
-                                        : m_light.vector;
-                    const float shade = visualizer_shade(n, l, m_light.ambient);
-                    put3(o, lit_color(albedo, shade, m_color_space));
-                }
-            }
+    // Shades G-buffer tile `g` into `out`, targets of the tile's size (Targets::tile): the texture
+    // lookups per pixel, the shading arithmetic over the whole tile at once (shade_lanes), then
+    // the passes per pixel.
+    void shade(const GBuffer& g, const Targets& out) const {
+        static thread_local ShadeLanes lanes;  // per thread, reused: no allocation per tile
+        fill_lanes(g, lanes);
+        if (m_need_frame) shade_lanes(lanes, m_lane_constants);
+        for (std::size_t i = 0; i < g.pixel_count(); ++i)
+            if (g.mask[i] > 0.f)
+                shade_hit(g, i, lanes, out);
+            else
+                shade_miss(g, i, out);
     }
 
 private:
+    // The passes that are G-buffer attributes as they are (zeros on the background).
+    static void copy_gbuffer_passes(const GBuffer& g, std::size_t i, const Targets& out) {
+        const std::size_t px = i;
+        out.coverage[px] = g.mask[i];
+        if (float* o = out.at(Pass::Mask, px)) o[0] = g.mask[i];
+        if (float* o = out.at(Pass::Depth, px)) o[0] = g.depth[i];
+        if (float* o = out.at(Pass::Normal, px)) put3(o, g.normal[i]);
+        if (float* o = out.at(Pass::Tangent, px)) put3(o, g.tangent[i]);
+    }
+
+    // Background: the G-buffer's zeros, and the background colour where it is composited.
+    void shade_miss(const GBuffer& g, std::size_t i, const Targets& out) const {
+        const std::size_t px = i;
+        copy_gbuffer_passes(g, i, out);
+        if (float* o = out.at(Pass::Uv, px)) o[0] = o[1] = 0.f;
+        if (float* o = out.at(Pass::Label, px)) put3(o, {});
+        if (float* o = out.at(Pass::Albedo, px)) put3(o, m_background);
+        if (!m_need_frame) return;
+        for (Pass p : {Pass::TactileNormal, Pass::ShadingNormal, Pass::ShadingNormalViewspace})
+            if (float* o = out.at(p, px)) put3(o, {});
+        if (float* o = out.at(Pass::Lambertian, px)) put3(o, m_background);
+    }
+
+    // The albedo and the (unnormalised) tangent-space tactile normal of hit pixel i. With an
+    // albedo and a tactile map of one size laid alike and filtered alike (training shading's
+    // default), both lookups share the LOD and the bilinear footprints.
+    void sample_maps(const GBuffer& g, std::size_t i, PixelLod& lod, Vec3f& albedo, Vec3f& p) const {
+        using Source = SurfaceMaterial::AlbedoSource;
+        const bool want_tactile = m_need_frame && m_mat.tactile;
+        if (m_paired_maps && m_need_albedo && want_tactile) {
+            float a[kMaxTextureChannels], t[kMaxTextureChannels];
+            m_mat.albedo->sample_trilinear_pair_at(*m_mat.tactile, g.uv[i], lod.of(*m_mat.albedo), a, t, -1);
+            albedo = texel_rgb(*m_mat.albedo, a);
+            p = {t[0], t[1], t[2]};
+            return;
+        }
+        if (m_need_albedo) {
+            if (m_mat.albedo_source == Source::Texture)
+                albedo = sample_rgb(*m_mat.albedo, g.uv[i], lod, m_albedo_mipmapped, -1);
+            else if (m_mat.albedo_source == Source::VertexColors)
+                albedo = vertex_color_at(m_mesh, g, i);
+            else
+                albedo = m_mat.albedo_constant;
+        }
+        if (want_tactile) {
+            float texel[kMaxTextureChannels];
+            // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
+            m_mat.tactile->sample_trilinear_at(g.uv[i] * m_tactile_scale,
+                                               lod.of(*m_mat.tactile) + m_tactile_lod_offset,
+                                               texel,
+                                               m_tactile_max_level);
+            p = {texel[0], texel[1], texel[2]};
+        }
+    }
+
+    // The lanes' inputs: the G-buffer's frame and position, and the texture lookups of the hits.
+    void fill_lanes(const GBuffer& g, ShadeLanes& l) const {
+        l.count = int(g.pixel_count());
+        for (std::size_t i = 0; i < g.pixel_count(); ++i) {
+            Vec3f albedo = m_background, p{0, 0, 1};
+            if (g.mask[i] > 0.f) {
+                PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
+                sample_maps(g, i, lod, albedo, p);
+            }
+            l.albedo[i] = albedo;
+            if (!m_need_frame) continue;
+            l.px[i] = p.x, l.py[i] = p.y, l.pz[i] = p.z;
+            l.nx[i] = g.normal[i].x, l.ny[i] = g.normal[i].y, l.nz[i] = g.normal[i].z;
+            l.tx[i] = g.tangent[i].x, l.ty[i] = g.tangent[i].y, l.tz[i] = g.tangent[i].z;
+            l.w[i] = g.handedness[i];
+            l.qx[i] = g.position[i].x, l.qy[i] = g.position[i].y, l.qz[i] = g.position[i].z;
+        }
+    }
+
+    void shade_hit(const GBuffer& g, std::size_t i, const ShadeLanes& l, const Targets& out) const {
+        const std::size_t px = i;
+        copy_gbuffer_passes(g, i, out);
+        if (float* o = out.at(Pass::Uv, px)) {
+            o[0] = g.uv[i].x;
+            o[1] = 1.f - g.uv[i].y;  // the reference's v' (spec 3.9)
+        }
+        if (float* o = out.at(Pass::Label, px)) {
+            PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
+            put3(o, m_mat.label ? sample_rgb(*m_mat.label, g.uv[i], lod, true, m_tactile_max_level) : Vec3f{});
+        }
+        if (float* o = out.at(Pass::Albedo, px)) put3(o, l.albedo[i]);
+        if (!m_need_frame) return;
+        if (float* o = out.at(Pass::TactileNormal, px)) put3(o, {l.tnx[i], l.tny[i], l.tnz[i]});
+        if (float* o = out.at(Pass::ShadingNormal, px)) put3(o, {l.snx[i], l.sny[i], l.snz[i]});
+        if (float* o = out.at(Pass::ShadingNormalViewspace, px)) put3(o, {l.vx[i], l.vy[i], l.vz[i]});
+        if (float* o = out.at(Pass::Lambertian, px)) put3(o, lit_color(l.albedo[i], l.shade[i], m_color_space));
+    }
+
     const TriangleMesh& m_mesh;
     const SurfaceMaterial& m_mat;
-    const Camera& m_camera;
-    const Light& m_light;
-    const Targets& m_targets;
     Vec3f m_background;
     ColorSpace m_color_space;
     bool m_training;
@@ -207,6 +287,10 @@ private:
     bool m_albedo_mipmapped;
     bool m_need_frame;
     bool m_need_albedo;
+    float m_tactile_scale;
+    float m_tactile_lod_offset;
+    bool m_paired_maps;
+    ShadeConstants m_lane_constants;
 };
 
 }  // namespace
@@ -266,8 +350,11 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
     parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
         // One small G-buffer per thread, reused across tiles and frames: stays in cache.
         static thread_local GBuffer g;
+        static thread_local std::vector<float> scratch;
         produce_tile(x0, y0, x1, y1, g);
-        shader.shade(g, x0, y0);
+        const Targets tile = targets.tile(scratch, g.pixel_count());
+        shader.shade(g, tile);
+        targets.flush(tile, camera.width, x0, y0, g.width, g.height);
         if (antialias)
             for (int y = y0; y < y1; ++y)
                 for (int x = x0; x < x1; ++x) {

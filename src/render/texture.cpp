@@ -1,6 +1,7 @@
 #include <tdf/render/texture.h>
 
 #include <tdf/core/error.h>
+#include <tdf/core/force_inline.h>
 #include <tdf/core/parallel.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@ inline BilinearFootprint wrapped_footprint(const Image& img, Vec2f uv) {
 }
 }  // namespace
 
+
 void MipTexture::assign(const Image& image) {
     if (image.empty()) throw_error("cannot build a texture from an empty image");
     if (image.channels() > kMaxTextureChannels)
@@ -27,27 +29,44 @@ void MipTexture::assign(const Image& image) {
         return;
     }
     std::copy(image.values().begin(), image.values().end(), m_levels[0].values().begin());
-    for (std::size_t k = 1; k < m_levels.size(); ++k) downsample_box_into(m_levels[k - 1], m_levels[k]);
+    rebuild_levels();
 }
 
-MipTexture::MipTexture(const Image& image) {
+MipTexture::MipTexture(const Image& image) : MipTexture(Image(image)) {}
+
+MipTexture::MipTexture(Image&& image) {
     if (image.empty()) throw_error("cannot build a texture from an empty image");
     if (image.channels() > kMaxTextureChannels)
         throw_error("textures have at most {} channels, this image has {}", kMaxTextureChannels, image.channels());
-    m_levels.push_back(image);
+    m_levels.push_back(std::move(image));
     while (m_levels.back().width() > 1 || m_levels.back().height() > 1)
         m_levels.push_back(downsample_box(m_levels.back()));
 }
 
-void MipTexture::sample_level(int level, Vec2f uv, float* out) const {
-    const Image& img = m_levels[std::size_t(level)];
-    const BilinearFootprint f = wrapped_footprint(img, uv);
-    switch (img.channels()) {  // fixed channel counts for the common maps: the renderer's inner loop
+void MipTexture::rebuild_levels() {
+    for (std::size_t k = 1; k < m_levels.size(); ++k) downsample_box_into(m_levels[k - 1], m_levels[k]);
+}
+
+namespace {
+// Fixed channel counts for the common maps: the renderer's inner loop.
+TDF_FORCE_INLINE void blend_level(const Image& img, const BilinearFootprint& f, float* out) {
+    switch (img.channels()) {
         case 3: blend_footprint<3>(img, f, out); break;
         case 4: blend_footprint<4>(img, f, out); break;
         case 1: blend_footprint<1>(img, f, out); break;
         default: blend_footprint(img, f, out); break;
     }
+}
+
+// The trilinear blend: level l0 already in `out`, level l0 + 1 in `next`.
+inline void lerp_levels(int channels, float frac, const float* next, float* out) {
+    for (int k = 0; k < channels; ++k) out[k] += frac * (next[k] - out[k]);
+}
+}  // namespace
+
+void MipTexture::sample_level(int level, Vec2f uv, float* out) const {
+    const Image& img = m_levels[std::size_t(level)];
+    blend_level(img, wrapped_footprint(img, uv), out);
 }
 
 void MipTexture::sample_bilinear(Vec2f uv, float* out) const { sample_level(0, uv, out); }
@@ -67,18 +86,66 @@ void MipTexture::sample_trilinear(Vec2f uv, Vec2f duv_dx, Vec2f duv_dy, float* o
     sample_trilinear_at(uv, level_of_detail(duv_dx, duv_dy), out, max_level);
 }
 
-void MipTexture::sample_trilinear_at(Vec2f uv, float lod, float* out, int max_level) const {
-    const int top = max_level < 0 ? level_count() - 1 : std::min(max_level, level_count() - 1);
+namespace {
+// The levels a trilinear lookup blends: l0, and l0 + 1 with weight frac when blend_next.
+struct LevelPair {
+    int l0;
+    float frac;
+    bool blend_next;
+};
+inline LevelPair level_pair(float lod, int level_count, int max_level) {
+    const int top = max_level < 0 ? level_count - 1 : std::min(max_level, level_count - 1);
     if (!(lod > 0.f)) lod = 0.f;  // also catches NaN
     lod = std::min(lod, float(top));
     const int l0 = int(lod);
     const float frac = lod - float(l0);
-    sample_level(l0, uv, out);
-    if (frac <= 0.f || l0 + 1 > top) return;
-    const int c = channels();
+    return {l0, frac, frac > 0.f && l0 + 1 <= top};
+}
+}  // namespace
+
+void MipTexture::sample_trilinear_at(Vec2f uv, float lod, float* out, int max_level) const {
+    const LevelPair p = level_pair(lod, level_count(), max_level);
+    sample_level(p.l0, uv, out);
+    if (!p.blend_next) return;
     float next[kMaxTextureChannels];
-    sample_level(l0 + 1, uv, next);
-    for (int k = 0; k < c; ++k) out[k] += frac * (next[k] - out[k]);
+    sample_level(p.l0 + 1, uv, next);
+    lerp_levels(channels(), p.frac, next, out);
+}
+
+namespace {
+// Both lookups of sample_trilinear_pair_at; C > 0 fixes both channel counts (3: RGB albedo and
+// XYZ tactile map, the renderer's inner loop), 0 reads them from the images.
+template <int C>
+void sample_pair(const std::vector<Image>& a, const std::vector<Image>& b, Vec2f uv, LevelPair p, float* out_a,
+                 float* out_b) {
+    const auto blend = [](const Image& img, const BilinearFootprint& f, float* out) {
+        if constexpr (C > 0)
+            blend_footprint<C>(img, f, out);
+        else
+            blend_level(img, f, out);
+    };
+    const BilinearFootprint f0 = wrapped_footprint(a[std::size_t(p.l0)], uv);
+    blend(a[std::size_t(p.l0)], f0, out_a);
+    blend(b[std::size_t(p.l0)], f0, out_b);
+    if (!p.blend_next) return;
+    const std::size_t l1 = std::size_t(p.l0 + 1);
+    const BilinearFootprint f1 = wrapped_footprint(a[l1], uv);
+    float next_a[kMaxTextureChannels], next_b[kMaxTextureChannels];
+    blend(a[l1], f1, next_a);
+    blend(b[l1], f1, next_b);
+    lerp_levels(C > 0 ? C : a[0].channels(), p.frac, next_a, out_a);
+    lerp_levels(C > 0 ? C : b[0].channels(), p.frac, next_b, out_b);
+}
+}  // namespace
+
+void MipTexture::sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, float lod, float* out,
+                                          float* other_out, int max_level) const {
+    TDF_CHECK(other.width() == width() && other.height() == height());
+    const LevelPair p = level_pair(lod, level_count(), max_level);
+    if (channels() == 3 && other.channels() == 3)
+        sample_pair<3>(m_levels, other.m_levels, uv, p, out, other_out);
+    else
+        sample_pair<0>(m_levels, other.m_levels, uv, p, out, other_out);
 }
 
 namespace {
@@ -102,18 +169,14 @@ void add_level_taps(const Image& img, int level, Vec2f uv, float scale, Trilinea
 }  // namespace
 
 void MipTexture::taps(Vec2f uv, float lod, int max_level, TrilinearTaps& taps) const {
-    const int top = max_level < 0 ? level_count() - 1 : std::min(max_level, level_count() - 1);
-    if (!(lod > 0.f)) lod = 0.f;
-    lod = std::min(lod, float(top));
-    const int l0 = int(lod);
-    const float frac = lod - float(l0);
+    const LevelPair p = level_pair(lod, level_count(), max_level);
     taps.count = 0;
-    if (frac <= 0.f || l0 + 1 > top) {
-        add_level_taps(m_levels[std::size_t(l0)], l0, uv, 1.0f, taps);
+    if (!p.blend_next) {
+        add_level_taps(m_levels[std::size_t(p.l0)], p.l0, uv, 1.0f, taps);
         return;
     }
-    add_level_taps(m_levels[std::size_t(l0)], l0, uv, 1.0f - frac, taps);
-    add_level_taps(m_levels[std::size_t(l0 + 1)], l0 + 1, uv, frac, taps);
+    add_level_taps(m_levels[std::size_t(p.l0)], p.l0, uv, 1.0f - p.frac, taps);
+    add_level_taps(m_levels[std::size_t(p.l0 + 1)], p.l0 + 1, uv, p.frac, taps);
 }
 
 namespace {

@@ -32,6 +32,28 @@ void MipGradient::add(const TrilinearTaps& taps, const float* grad) {
     }
 }
 
+MipGradient::Bands MipGradient::bands(int count) const {
+    TDF_CHECK(count >= 1);
+    Bands b;
+    b.count = count;
+    for (const Image& level : m_levels) {
+        const std::uint64_t texels = level.pixel_count();
+        for (int k = 0; k <= count; ++k) b.edges.push_back(std::uint32_t(texels * std::uint64_t(k) / std::uint64_t(count)));
+    }
+    return b;
+}
+
+void MipGradient::add_band(const TrilinearTaps& taps, const float* grad, const Bands& bands, int band) {
+    const int c = channels();
+    for (int t = 0; t < taps.count; ++t) {
+        const std::uint32_t* edge = bands.edges.data() + std::size_t(taps.level[t]) * std::size_t(bands.count + 1);
+        if (taps.texel[t] < edge[band] || taps.texel[t] >= edge[band + 1]) continue;
+        float* texel = m_levels[std::size_t(taps.level[t])].data() + std::size_t(taps.texel[t]) * std::size_t(c);
+        const float w = taps.weight[t];
+        for (int k = 0; k < c; ++k) texel[k] += w * grad[k];
+    }
+}
+
 void MipGradient::accumulate(const MipGradient& other) {
     TDF_CHECK_EQ(other.m_levels.size(), m_levels.size());
     for (std::size_t k = 0; k < m_levels.size(); ++k) {

@@ -114,6 +114,58 @@ std::string colour_section(const RunReport& r, const std::string& folder) {
     return html + "</div>\n";
 }
 
+// Issue 24: the relief's scale, and what a virtual GelSight pressed on the asset measures
+// against the input capture, with the capture and the touches side by side.
+std::string touch_section(const RunReport& r, const std::string& folder) {
+    if (r.height_map.empty() && r.tactile_roundtrip.empty()) return "";
+    std::string html = "<h2 id=\"touch\">Relief and touch</h2>\n<table>\n<tr><th>measure</th><th class=\"num\">value</th></tr>\n";
+    const auto row = [&](const Json& j, const char* key) {
+        const auto it = j.find(key);
+        if (it != j.end())
+            html += fmt::format("<tr><td><code>{}</code></td><td class=\"num\">{}</td></tr>\n", key,
+                                html_escape(format_json_value(*it)));
+    };
+    for (const char* key : {"mm_per_texel", "mm_per_unit", "min_mm", "max_mm", "mm_per_step", "normal_consistency_cosine",
+                            "mm_per_texel_assumed"})
+        row(r.height_map, key);
+    for (const char* key : {"tilt_ratio", "height_rms_ratio", "spectrum_distance", "within_aim"})
+        row(r.tactile_roundtrip, key);
+    html += "</table>\n<p>Tilt and height RMS ratios: the virtual GelSight's touches over the input capture's "
+            "contact region (aim [0.85, 1.15]); spectrum distance: half the L1 distance of their detail "
+            "energy per octave (0 = the same).</p>\n<div class=\"figures\">\n";
+    for (const ReportImage& t : r.touches)
+        html += fmt::format("<figure>{}<figcaption>{}</figcaption></figure>\n", image_tag(t.path, folder, t.caption),
+                            html_escape(t.caption));
+    return html + "</div>\n";
+}
+
+// Multi-part runs: each part's mask, the relief it should carry and its numbers.
+std::string parts_section(const RunReport& r, const std::string& folder) {
+    if (!r.parts.is_array() || r.parts.empty()) return "";
+    std::string html = "<h2 id=\"parts\">Parts</h2>\n<table>\n<tr><th>part</th><th>mask</th><th>material</th>";
+    const char* keys[] = {"label_accuracy", "bleed_texels", "tilt_ratio", "normal_cosine"};
+    for (const char* key : keys) html += fmt::format("<th class=\"num\"><code>{}</code></th>", key);
+    html += "</tr>\n";
+    for (const Json& part : r.parts) {
+        const std::string name = part.value("name", "");
+        html += fmt::format("<tr><td><span style=\"display:inline-block;width:1em;height:1em;background:{}\"></span> {}</td>",
+                            html_escape(part.value("colour", "#000000")), html_escape(name));
+        for (const char* image : {"mask", "swatch"}) {
+            const std::string file = part.value(image, "");
+            html += "<td>" + (file.empty() ? std::string("-") : image_tag(folder + "/" + file, folder, name + " " + image, "thumb")) +
+                    "</td>";
+        }
+        for (const char* key : keys) {
+            const auto it = part.find(key);
+            html += fmt::format("<td class=\"num\">{}</td>", html_escape(it == part.end() ? "-" : format_json_value(*it)));
+        }
+        html += "</tr>\n";
+    }
+    html += "</table>\n<p class=\"meaning\">";
+    for (const char* key : keys) html += fmt::format("<code>{}</code>: {} ", key, html_escape(quality_meaning(key)));
+    return html + "</p>\n";
+}
+
 // First, end-of-matching and last value of every loss term: the numbers behind the plot.
 std::string loss_table(const RunReport& r) {
     if (!r.losses.is_array() || r.losses.empty()) return "";
@@ -221,6 +273,14 @@ std::string quality_meaning(const std::string& key) {
          "neighbourhood."},
         {"held_out_views", "number of held-out visual views the numbers are measured on."},
         {"held_out_patches", "number of held-out tactile patches the numbers are measured on."},
+        {"label_accuracy", "share of the part's texels the label head predicts as the part (the label map)."},
+        {"bleed_texels",
+         "after matching: farthest texel of the part (texels from another part) whose normal differs from the "
+         "part's own map by more than 1 degree; aim <= 2."},
+        {"tilt_ratio",
+         "final normal map's mean detail tilt over the part's texels / its own map's laid there: 1 = its own "
+         "relief's strength; aim 0.85-1.15."},
+        {"normal_cosine", "mean cosine of the final normal map against the part's own laid map over its texels."},
     };
     const auto it = kMeanings.find(key);
     return it == kMeanings.end() ? std::string() : it->second;
@@ -236,7 +296,8 @@ void write_run_report(const std::string& html_path, const RunReport& r) {
         html_escape(r.scene_path));
     body +=
         "<nav class=\"card\"><a href=\"#turntables\">turntables</a> &middot; <a href=\"#viewer\">3D view</a> "
-        "&middot; <a href=\"#quality\">quality</a> &middot; <a href=\"#colour\">albedo vs input</a> &middot; <a href=\"#maps\">maps</a> &middot; <a "
+        "&middot; <a href=\"#quality\">quality</a> &middot; <a href=\"#colour\">albedo vs input</a> &middot; " +
+        std::string(r.parts.empty() ? "" : "<a href=\"#parts\">parts</a> &middot; ") + "<a href=\"#touch\">relief and touch</a> &middot; <a href=\"#maps\">maps</a> &middot; <a "
         "href=\"#losses\">losses</a> &middot; <a href=\"#timings\">timings</a> &middot; <a "
         "href=\"#config\">configuration</a></nav>\n";
 
@@ -257,6 +318,8 @@ void write_run_report(const std::string& html_path, const RunReport& r) {
     body += "<h2 id=\"quality\">Quality (held-out views and patches)</h2>\n" + quality_section(r);
 
     body += colour_section(r, folder);
+    body += parts_section(r, folder);
+    body += touch_section(r, folder);
 
     body += "<h2 id=\"maps\">Exported maps</h2>\n<div class=\"figures\">\n";
     for (const ReportImage& m : r.maps)

@@ -177,11 +177,10 @@ void parse_parts(ConfigReader parts, const fs::path& base, PartsSpec& spec) {
     if (src.kind == "external" && (!src.external.is_object() || !src.external.contains("command")))
         throw_error("{}: kind is 'external' but 'external.command' is not set", where);
 
-    if (!parts.has("list")) throw_error("{}: 'list' is missing (at least 2 parts)", parts.where());
+    if (!parts.has("list")) throw_error("{}: 'list' is missing (at least 1 part)", parts.where());
     const Json& list = parts.raw("list");
     if (!list.is_array()) throw_error("{}: 'list' must be a list of parts", parts.where());
-    if (list.size() < 2)
-        throw_error("{}: 'list' has {} part(s); at least 2 are needed", parts.where(), list.size());
+    if (list.empty()) throw_error("{}: 'list' is empty; at least 1 part is needed", parts.where());
     if (list.size() > 64)
         throw_error("{}: 'list' has {} parts; at most 64 are supported", parts.where(), list.size());
     int without_select = 0;

@@ -172,26 +172,35 @@ double texture_distance(const MaterialStatistics& a, const MaterialStatistics& b
            6.0;
 }
 
-std::string MaterialComparison::json() const {
-    return fmt::format(
-        "{{\"region_fraction\": {:.4f}, \"region_mean_tilt\": {:.4f}, \"region_flat\": {:.4f}, "
-        "\"out_mean_tilt\": {:.4f}, \"out_flat\": {:.4f}, \"tilt_ratio\": {:.4f}, \"distance\": {:.4f}, \"tilt_l1\": {:.3f}, "
-        "\"orientation_l1\": {:.3f}, \"scale_l1\": {:.3f}, \"input_mean_tilt\": {:.4f}, \"input_flat\": {:.4f}, "
-        "\"input_tilt_ratio\": {:.4f}}}",
-        region.fraction,
-        region.mean_tilt,
-        region.flat_fraction,
-        output.mean_tilt,
-        output.flat_fraction,
-        tilt_ratio,
-        distance,
-        tilt_l1,
-        orientation_l1,
-        scale_l1,
-        input_mean_tilt,
-        input_flat,
-        input_tilt_ratio);
+namespace {
+double rounded(double value, int decimals) {
+    const double scale = std::pow(10.0, decimals);
+    return std::round(value * scale) / scale;
 }
+}  // namespace
+
+double rounded_significant(double value, int digits) {
+    if (value == 0 || !std::isfinite(value)) return value;
+    return rounded(value, digits - 1 - int(std::floor(std::log10(std::fabs(value)))));
+}
+
+Json MaterialComparison::to_json() const {
+    return {{"region_fraction", rounded(region.fraction, 4)},
+            {"region_mean_tilt", rounded(region.mean_tilt, 4)},
+            {"region_flat", rounded(region.flat_fraction, 4)},
+            {"out_mean_tilt", rounded(output.mean_tilt, 4)},
+            {"out_flat", rounded(output.flat_fraction, 4)},
+            {"tilt_ratio", rounded(tilt_ratio, 4)},
+            {"distance", rounded(distance, 4)},
+            {"tilt_l1", rounded(tilt_l1, 3)},
+            {"orientation_l1", rounded(orientation_l1, 3)},
+            {"scale_l1", rounded(scale_l1, 3)},
+            {"input_mean_tilt", rounded(input_mean_tilt, 4)},
+            {"input_flat", rounded(input_flat, 4)},
+            {"input_tilt_ratio", rounded(input_tilt_ratio, 4)}};
+}
+
+std::string MaterialComparison::json() const { return to_json().dump(); }
 
 MaterialComparison compare_material(const Image& input, const Image& region, const Image& output) {
     const DetailSlopes in = detail_slopes(input), out = detail_slopes(output);

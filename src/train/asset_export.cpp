@@ -2,12 +2,14 @@
 
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/log.h>
+#include <tdf/core/parallel.h>
 #include <tdf/io/image_io.h>
 #include <tdf/mesh/mesh_writer.h>
 #include <tdf/render/frame.h>
 #include <tdf/render/renderer.h>
 #include <tdf/render/texture.h>
 #include <tdf/scene/embree_scene.h>
+#include <tdf/tactile/material_statistics.h>
 
 #include <fmt/format.h>
 
@@ -23,8 +25,29 @@ BakedMaps export_asset(const std::string& folder, const std::string& name, const
     return maps;
 }
 
-void write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
-                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config) {
+namespace {
+
+/// The normals as the 8-bit PNG written by write_asset decodes them.
+Image decoded_png_normals(const Image& normals) {
+    Image unit = encode_normal_map(normals);
+    for (float& v : unit.values()) v = v * 2.0f - 1.0f;
+    return quantized_normals(unit, 8);
+}
+
+/// The atlas's covered texels (1) when the raster has the map's size, else empty (all).
+Image covered_texels(const BakedMaps& maps) {
+    const int size = maps.raster.size;
+    if (size != maps.tactile_normal.width() || size != maps.tactile_normal.height()) return Image();
+    Image mask(size, size, 1);
+    for (std::size_t t = 0; t < maps.raster.triangle.size(); ++t) mask.data()[t] = maps.raster.triangle[t] >= 0 ? 1.0f : 0.0f;
+    return mask;
+}
+
+}  // namespace
+
+Json write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config,
+                 const FaceMaterials& parts, const ExportScale* height_scale) {
     const std::string stem = name + postfix;
     const std::string base = folder + "/" + stem;
     // Matches reference: 8-bit maps by truncation (spec 1.5 step 6, 13.20); EXRs keep floats.
@@ -41,16 +64,40 @@ void write_asset(const std::string& folder, const std::string& name, const std::
     material.name = "defaultMat";
     material.albedo_map = stem + "_albedo.png";
     material.normal_map = stem + "_tactile_normal.png";
-    write_obj(base + ".obj", mesh, material);
+    Json height_json;
+    if (height_scale && height_scale->mm_per_texel > 0) {
+        const ExportedHeight height =
+            export_height(decoded_png_normals(maps.tactile_normal), *height_scale,
+                          stem + "_tactile_normal.png", covered_texels(maps));
+        write_exported_height(base, height);
+        height_json = exported_height_json(height, *height_scale, stem + "_height.png", stem + "_height.exr");
+        if (height_scale->mm_per_unit > 0) material.height_map = stem + "_height.png";
+        material.height_base = double(height.min_mm) / double(height_scale->mm_per_unit);
+        material.height_gain = double(height.max_mm - height.min_mm) / double(height_scale->mm_per_unit);
+        log_info("height map {}_height.exr: {:.4g} .. {:.4g} mm at {:.4g} mm per texel{}; normals recomputed from it: "
+                 "mean cosine {:.5f}",
+                 base, height.min_mm, height.max_mm, height_scale->mm_per_texel,
+                 height_scale->assumed ? " (capture pixel size unknown: GelSight Mini's assumed)" : "",
+                 height.mean_cosine);
+        if (height.mean_cosine < kHeightConsistencyLimit)
+            log_warning("{}: the height map reproduces the normal map only to a mean cosine of {:.4f} (limit {})",
+                        normal_png, height.mean_cosine, kHeightConsistencyLimit);
+    }
+    write_obj(base + ".obj", mesh, material, parts);
     if (config.write_glb) {
         // The GLB embeds the very bytes of the PNG files beside it.
         GlbMaps glb_maps;
         glb_maps.albedo_png = read_text_file(albedo_png);
         glb_maps.normal_png = read_text_file(normal_png);
-        write_glb(base + ".glb", mesh, glb_maps);
+        if (!height_json.is_null()) {
+            glb_maps.height_png = read_text_file(base + "_height.png");
+            glb_maps.height_extras = height_json;
+        }
+        write_glb(base + ".glb", mesh, glb_maps, parts);
     }
     log_info("exported {}.obj (+ .mtl{}, maps {}x{})", base, config.write_glb ? ", .glb" : "", maps.albedo.width(),
              maps.albedo.height());
+    return height_json;
 }
 
 TurntableFraming turntable_framing(const TriangleMesh& mesh) {
@@ -99,11 +146,15 @@ std::vector<std::string> write_turntable(const std::string& folder, const std::s
         light.vector = camera.back;
         light.ambient = 0.1f;
         const Frame frame = renderer.render(camera, light, passes);
-        for (std::size_t p = 0; p < passes.size(); ++p) {
-            const std::string path = fmt::format("{}/{}/{}_{:03d}.png", folder, subfolder, pass_name(passes[p]), k);
-            write_png(path, preview_image(passes[p], frame.images[p], frame.coverage), 8, Quantize::Truncate);
-            written.push_back(path);
-        }
+        std::vector<std::string> paths(passes.size());
+        for (std::size_t p = 0; p < passes.size(); ++p)
+            paths[p] = fmt::format("{}/{}/{}_{:03d}.png", folder, subfolder, pass_name(passes[p]), k);
+        // One file per task: libpng encodes a file on one thread, and the render above is parallel.
+        parallel_for(passes.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t p = begin; p < end; ++p)
+                write_png(paths[p], preview_image(passes[p], frame.images[p], frame.coverage), 8, Quantize::Truncate);
+        });
+        written.insert(written.end(), paths.begin(), paths.end());
     }
     return written;
 }

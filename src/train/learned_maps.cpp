@@ -16,8 +16,8 @@ LearnedMaps::LearnedMaps(const TexelAtlas& atlas)
     : m_atlas(&atlas),
       m_residual(atlas.covered_count() * kResidualPerTexel, 0.0f),
       m_field_outputs(atlas.covered_count()),
-      m_albedo_level0(atlas.size, atlas.size, 3, 0.5f),
-      m_normal_level0(atlas.size, atlas.size, 3, 0.0f) {
+      m_albedo(Image(atlas.size, atlas.size, 3, 0.5f)),
+      m_normal(Image(atlas.size, atlas.size, 3, 0.0f)) {
     for (FieldOutputs& o : m_field_outputs) o = FieldOutputs{{0.5f, 0.5f, 0.5f}, {0, 0, 1}, {0, 0}};
 }
 
@@ -57,6 +57,9 @@ void LearnedMaps::set_albedo_bounds(Image low, Image high) {
 void LearnedMaps::update() {
     const TexelAtlas& a = *m_atlas;
     const bool bounded = !m_albedo_low.empty();
+    // Composed into the textures' own level 0 (one copy of each map), then their mips rebuilt.
+    Image& albedo_level0 = m_albedo.base_level();
+    Image& normal_level0 = m_normal.base_level();
     parallel_for(a.covered_count(), kTexelGrain, [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
             const std::size_t t = a.texels[k];
@@ -70,25 +73,25 @@ void LearnedMaps::update() {
                     albedo = std::clamp(albedo, m_albedo_low.data()[i], m_albedo_high.data()[i]);
                     r[c] = albedo - m_field_outputs[k].albedo[c];
                 }
-                m_albedo_level0.data()[i] = albedo;
-                m_normal_level0.data()[3 * t + std::size_t(c)] = m_field_outputs[k].normal[c] + r[3 + c];
+                albedo_level0.data()[i] = albedo;
+                normal_level0.data()[3 * t + std::size_t(c)] = m_field_outputs[k].normal[c] + r[3 + c];
             }
         }
     });
-    a.fill_gutter(m_albedo_level0);
-    a.fill_gutter(m_normal_level0);
-    m_albedo.assign(m_albedo_level0);
-    m_normal.assign(m_normal_level0);
+    a.fill_gutter(albedo_level0);
+    a.fill_gutter(normal_level0);
+    m_albedo.rebuild_levels();
+    m_normal.rebuild_levels();
 }
 
 Image LearnedMaps::export_albedo() const {
-    Image out = m_albedo_level0;
+    Image out = m_albedo.level(0);
     for (float& v : out.values()) v = std::clamp(v, 0.0f, 1.0f);
     return out;
 }
 
 Image LearnedMaps::export_normal() const {
-    Image out = m_normal_level0;
+    Image out = m_normal.level(0);
     for (std::size_t p = 0; p < out.pixel_count(); ++p) {
         float* n = out.data() + 3 * p;
         const Vec3f u = safe_normalize(Vec3f{n[0], n[1], n[2]});
@@ -139,7 +142,7 @@ void LearnedMaps::jacobi_step(Image& d_albedo, const Image& d_normal, float step
     // (zero outside the map: the gutter holds no gradient after backward()) spreads gradient and
     // curvature alike, so the step stays the coverage-weighted mean of what nearby pixels ask.
     // The normal map is left alone: tactile patches read it near level 0, and per-part gating
-    // (README "Multi-part textures") must not reach across a part's boundary.
+    // (docs/multi-part-textures.md) must not reach across a part's boundary.
     for (int pass = 0; pass < smoothing; ++pass) {
         if (m_step_scratch.width() != d_albedo.width() || m_step_scratch.height() != d_albedo.height() ||
             m_step_scratch.channels() != d_albedo.channels())

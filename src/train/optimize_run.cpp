@@ -14,7 +14,10 @@
 #include <tdf/tactile/tactile_map.h>
 #include <tdf/train/albedo_spots.h>
 #include <tdf/train/asset_export.h>
+#include <tdf/train/asset_height.h>
+#include <tdf/train/tactile_roundtrip.h>
 #include <tdf/train/part_gating.h>
+#include <tdf/train/part_quality.h>
 #include <tdf/train/run_report.h>
 #include <tdf/train/run_guard.h>
 #include <tdf/train/texture_fidelity.h>
@@ -23,8 +26,10 @@
 #include <fmt/format.h>
 
 #include <cctype>
+#include <chrono>
 #include <filesystem>
 #include <set>
+#include <sys/resource.h>
 
 namespace tdf {
 
@@ -197,23 +202,116 @@ PartTraining prepare_part_training(const SceneDescription& description, const Tr
     return parts;
 }
 
-void run_optimize(const OptimizeOptions& options) {
-    const SceneDescription description = load_scene(options.scene_path, options.overrides);
-    const RunConfig config = RunConfig::from_json(section(description, "optimize"), section(description, "tactile_layout"),
-                                                  section(description, "export"), section(description, "guidance"),
-                                                  options.scene_path, section(description, "field"),
-                                                  section(description, "schedule"));
-    if (description.tactile_images.empty())
-        throw_error("{}: the scene names no tactile texture (tactile.images); `tdf optimize` needs one", options.scene_path);
-    const std::string name =
-        options.name.empty() ? fs::absolute(options.scene_path).parent_path().filename().string() : options.name;
-    const RunGuard guard(options.output_dir, name, "optimize");  // run safety: README "Runs that survive"
+namespace {
 
-    std::unique_ptr<SceneAssets> assets = load_scene_assets(description);
+// The process's peak resident memory so far (Linux reports ru_maxrss in KiB).
+double peak_memory_mb() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_maxrss) / 1024.0;
+}
+
+// One `tdf optimize` run's inputs and what its stages hand each other.
+struct OptimizeRun {
+    const OptimizeOptions& options;
+    SceneDescription description;
+    RunConfig config;
+    std::string name;  // file prefix
+    std::string base;  // output_dir/name
+    std::unique_ptr<SceneAssets> assets;
+    TrainingTarget target;
+    Json resolved;        // the scene with the resolved configuration (<name>_config.json)
+    Json inputs;          // run safety: every input's hash
+    std::unique_ptr<PartTraining> parts;  // multi-part only
+    std::string checkpoint_path;
+    LossLog log;
+    Image matched_albedo;  // the after-matching albedo, for the report's spot crops (issue 29)
+    // Multi-part: the learned normal map at the part boundaries after matching (bleed is
+    // meaningful then, when the map equals the composed target; refinement changes texels everywhere).
+    Json boundary_after_matching;
+    std::vector<PartQuality> quality_after_matching;  // the report's parts[] (part_quality.h)
+    FaceMaterials face_materials;  // multi-part: one material (and glTF primitive) per part
+    // Wall seconds per stage of the job, in the order they ran, and the process's peak memory at
+    // each stage's end (the report's `stages`: where a run's time and memory go).
+    struct Stage {
+        std::string name;
+        double seconds = 0;
+        double peak_mb = 0;
+    };
+    std::vector<Stage> stages;
+    std::chrono::steady_clock::time_point stage_start = std::chrono::steady_clock::now();
+
+    explicit OptimizeRun(const OptimizeOptions& o)
+        : options(o),
+          description(load_scene(o.scene_path, o.overrides)),
+          config(RunConfig::from_json(section(description, "optimize"), section(description, "tactile_layout"),
+                                      section(description, "export"), section(description, "guidance"), o.scene_path,
+                                      section(description, "field"), section(description, "schedule"))),
+          checkpoint_path(o.output_dir + "/checkpoint.bin") {
+        if (description.tactile_images.empty())
+            throw_error("{}: the scene names no tactile texture (tactile.images); `tdf optimize` needs one", o.scene_path);
+        name = o.name.empty() ? fs::absolute(o.scene_path).parent_path().filename().string() : o.name;
+        base = o.output_dir + "/" + name;
+    }
+
+    // Ends the stage running since the previous call (or the start) and names it.
+    void end_stage(const std::string& stage) {
+        const auto now = std::chrono::steady_clock::now();
+        const double seconds = std::chrono::duration<double>(now - stage_start).count();
+        stage_start = now;
+        const double peak_mb = peak_memory_mb();
+        for (Stage& s : stages)
+            if (s.name == stage) {
+                s.seconds += seconds;
+                s.peak_mb = peak_mb;
+                return;
+            }
+        stages.push_back({stage, seconds, peak_mb});
+    }
+    Json stages_json() const {
+        Json j = Json::array();
+        for (const Stage& s : stages) j.push_back({{"stage", s.name}, {"seconds", s.seconds}, {"peak_mb", s.peak_mb}});
+        return j;
+    }
+
+    void save_checkpoint(const Trainer& trainer) const {
+        const Json extra = {{"inputs", inputs}, {"iteration", trainer.iteration()},  // run safety: input hashes
+                            {"seed", description.seed},
+                            {"config", resolved.dump()},
+                            {"losses", log.to_json_lines()}};
+        save_field_checkpoint(checkpoint_path, trainer.checkpoint_pieces(), extra.dump());
+    }
+    void write_log() const {
+        write_text_atomically(base + "_losses.jsonl", log.to_json_lines());
+        write_text_atomically(base + "_loss_plot.svg", log.to_svg(config.init_iterations));
+    }
+    // How the learned normal map handles the part boundaries (measure_part_boundary against each
+    // part's own laid map).
+    Json boundary_json(const BakedMaps& m) const {
+        const PartBoundaryMeasure b = measure_part_boundary(m.tactile_normal, parts->segmentation.texel_part,
+                                                            parts->segmentation.size, parts->layers);
+        return Json{{"bleed_texels", b.bleed_texels},
+                    {"boundary_step_degrees", b.boundary_step_degrees},
+                    {"hard_cut_step_degrees", b.hard_step_degrees},
+                    {"band_detail_ratio", b.band_detail_ratio}};
+    }
+    std::vector<PartQuality> part_quality(const BakedMaps& m, const std::vector<int>& predicted) const {
+        const PartSegmentation& seg = parts->segmentation;
+        return measure_part_quality(m.tactile_normal, parts->target, seg.texel_part, predicted, seg.size,
+                                    parts->layers, seg.part_names);
+    }
+};
+
+// The scene's assets, the training target, the resolved configuration and the input hashes; a
+// refused resume stops here, before anything is written.
+void load_inputs(OptimizeRun& run) {
+    const RunConfig& config = run.config;
+    const SceneDescription& description = run.description;
+    run.assets = load_scene_assets(description);
     {
         // The reference's cameras (radius 1.25-2.25, 0.15-unit patches, spec 2.3-2.4) assume a mesh
         // of about unit size centred at the origin; its base meshes are (training uses raw coordinates).
-        const Bounds3 bounds = compute_bounds(assets->mesh);
+        const Bounds3 bounds = compute_bounds(run.assets->mesh);
         const Vec3f e = bounds.extent();
         const float largest = std::max(e.x, std::max(e.y, e.z));
         if (largest > 4.0f || largest < 0.5f || length(bounds.center()) > 0.5f * largest)
@@ -221,54 +319,62 @@ void run_optimize(const OptimizeOptions& options) {
                         "expect about [-1, 1]: set \"normalize\": true in the scene", description.mesh, largest,
                         bounds.center().x, bounds.center().y, bounds.center().z);
     }
-    TrainingTarget target;
-    target.mesh = &assets->mesh;
-    target.scene = assets->scene.get();
-    target.material = &assets->material;
-    target.prompt = make_prompt(object_name_for_prompt(description, assets->mesh), description.tactile_images.front());
-    Json resolved = description.to_json();
+    TrainingTarget& target = run.target;
+    target.mesh = &run.assets->mesh;
+    target.scene = run.assets->scene.get();
+    target.material = &run.assets->material;
+    target.prompt = make_prompt(object_name_for_prompt(description, run.assets->mesh), description.tactile_images.front());
+    run.resolved = description.to_json();
     const Json config_json = config.to_json();
-    for (auto it = config_json.begin(); it != config_json.end(); ++it) resolved[it.key()] = *it;
-    const std::string base = options.output_dir + "/" + name;
-    // run safety: hash every input; a refused resume stops here, before anything is written
-    const Json inputs = hash_input_files(scene_input_files(description, guidance_exemplar_files(config.guidance_config)));
-    if (options.resume) verify_resume(options.output_dir + "/checkpoint.bin", resolved.dump(), inputs);
-    write_text_atomically(base + "_config.json", resolved.dump(2) + "\n");
+    for (auto it = config_json.begin(); it != config_json.end(); ++it) run.resolved[it.key()] = *it;
+    run.inputs = hash_input_files(scene_input_files(description, guidance_exemplar_files(config.guidance_config)));
+    if (run.options.resume) verify_resume(run.checkpoint_path, run.resolved.dump(), run.inputs);
+}
+
+// The first file of the run, written once the inputs (parts included) are known good: bad
+// input leaves nothing.
+void write_resolved_config(const OptimizeRun& run) {
+    write_text_atomically(run.base + "_config.json", run.resolved.dump(2) + "\n");
     log_info("tdf optimize: scene {}, seed {}, {} iterations ({} matching), resolved configuration in {}_config.json",
-             options.scene_path, description.seed, config.iterations, config.init_iterations, base);
-    log_info("prompt: \"{}\"", target.prompt);
+             run.options.scene_path, run.description.seed, run.config.iterations, run.config.init_iterations, run.base);
+    log_info("prompt: \"{}\"", run.target.prompt);
+}
 
-    // Multi-part: the segmentation and the composed target (README "Multi-part textures").
-    std::unique_ptr<PartTraining> parts;
-    if (description.parts.enabled()) {
-        if (config.evaluation != FieldEvaluation::Texture)
-            throw_error("{}: multi-part scenes need field.evaluation=texture (pixel evaluation has no part support)",
-                        options.scene_path);
-        parts = std::make_unique<PartTraining>(prepare_part_training(description, assets->mesh, assets->material,
-                                                                     config.texture_size, config.gutter,
-                                                                     options.scene_path + ": parts"));
-        target.tactile_target_override = &parts->target;
-        target.texel_parts = &parts->segmentation.texel_part;
-        target.part_names = parts->segmentation.part_names;
-        std::string summary;
-        for (std::size_t p = 0; p < parts->segmentation.part_count(); ++p)
-            summary += fmt::format("{}{} {:.1f} %", p ? ", " : "", parts->segmentation.part_names[p],
-                                   100.0 * parts->segmentation.part_fraction[p]);
-        log_info("parts ({}): {}", description.parts.source.kind, summary);
-    }
+// Multi-part: the segmentation and the composed target (docs/multi-part-textures.md).
+void prepare_parts(OptimizeRun& run) {
+    if (!run.description.parts.enabled()) return;
+    const RunConfig& config = run.config;
+    if (config.evaluation != FieldEvaluation::Texture)
+        throw_error("{}: multi-part scenes need field.evaluation=texture (pixel evaluation has no part support)",
+                    run.options.scene_path);
+    run.parts = std::make_unique<PartTraining>(prepare_part_training(run.description, run.assets->mesh,
+                                                                     run.assets->material, config.texture_size,
+                                                                     config.gutter, run.options.scene_path + ": parts"));
+    const PartSegmentation& seg = run.parts->segmentation;
+    run.target.tactile_target_override = &run.parts->target;
+    run.target.texel_parts = &seg.texel_part;
+    run.target.part_names = seg.part_names;
+    run.face_materials = {seg.part_names, seg.face_part};
+    std::string summary;
+    for (std::size_t p = 0; p < seg.part_count(); ++p)
+        summary += fmt::format("{}{} {:.1f} %", p ? ", " : "", seg.part_names[p], 100.0 * seg.part_fraction[p]);
+    log_info("parts ({}): {}", run.description.parts.source.kind, summary);
+}
 
-    Trainer trainer(target, config, description.seed);
+// The guidance backends: visual, and tactile once or (multi-part) per part with the part's own
+// maps as exemplars and its own settings (parts.list[i].guidance), gated by the part's mask.
+void attach_guidance(Trainer& trainer, const OptimizeRun& run) {
+    const RunConfig& config = run.config;
+    const SceneDescription& description = run.description;
     if (trainer.tactile_seam_blend().seam_edges > 0)
         log_info("tactile map across UV seams: {} seam edges, {} texels cross-faded within {} texels "
                  "(field.tactile_seam_band)",
                  trainer.tactile_seam_blend().seam_edges, trainer.tactile_seam_blend().blended_texels,
                  config.tactile_seam_band);
     auto visual = make_backend(config.guidance_visual, config, description.tactile_images);
-    // Multi-part: a tactile backend per part, with the part's own maps as exemplars and its own
-    // settings (parts.list[i].guidance), gated by the part's mask (README "Multi-part textures").
     std::unique_ptr<GuidanceBackend> tactile;
     bool tactile_on = false;
-    if (parts) {
+    if (run.parts) {
         std::vector<PartGuidance> part_guidance;
         for (std::size_t k = 0; k < description.parts.parts.size(); ++k) {
             const PartSpec& spec = description.parts.parts[k];
@@ -276,7 +382,7 @@ void run_optimize(const OptimizeOptions& options) {
             g.name = spec.name;
             g.prompt = spec.prompt;
             g.settings = PartGuidanceSettings::from_json(
-                spec.guidance, fmt::format("{}: parts.list[{}].guidance", options.scene_path, k));
+                spec.guidance, fmt::format("{}: parts.list[{}].guidance", run.options.scene_path, k));
             const std::string backend = g.settings.backend.empty() ? config.guidance_tactile : g.settings.backend;
             g.backend = make_backend(backend, config, spec.tactile_images, g.settings.backend_config);
             tactile_on = tactile_on || g.backend;
@@ -293,52 +399,51 @@ void run_optimize(const OptimizeOptions& options) {
     trainer.set_guidance(std::move(visual), std::move(tactile));
     log_info("tactile patches: {:.2f} pixels per tactile map texel ({} px over {:.4g} mesh units)", trainer.pixels_per_texel(),
              config.patch_resolution, 2.0 * double(config.patch_half_extent));
-    if (config.save_guidance_frames) trainer.save_guidance_frames_to(options.output_dir + "/guidance_frames");
+    if (config.save_guidance_frames) trainer.save_guidance_frames_to(run.options.output_dir + "/guidance_frames");
+}
 
-    const std::string checkpoint_path = options.output_dir + "/checkpoint.bin";
-    const std::string resolved_text = resolved.dump();
-    LossLog log;
-    if (options.resume) {
-        if (!fs::exists(checkpoint_path))
-            throw_error("--resume: no checkpoint at '{}' (start without --resume)", checkpoint_path);
-        const FieldCheckpoint checkpoint = load_field_checkpoint(checkpoint_path);
-        const Json extra = parse_json(checkpoint.extra, checkpoint_path);
-        if (!extra.contains("config") || extra["config"].get<std::string>() != resolved_text)
-            throw_error("--resume: '{}' was written with a different scene or configuration", checkpoint_path);
-        const int iteration = extra["iteration"].get<int>();
-        trainer.restore(iteration, checkpoint.parameters, checkpoint.adam);
-        log = LossLog::from_json_lines(extra["losses"].get<std::string>(), checkpoint_path);
-        log.truncate(iteration);
-        log_info("resuming at iteration {} from {}", iteration, checkpoint_path);
+// --resume: the trainer and the loss log from the checkpoint.
+void resume_from_checkpoint(Trainer& trainer, OptimizeRun& run) {
+    const std::string& path = run.checkpoint_path;
+    if (!fs::exists(path)) throw_error("--resume: no checkpoint at '{}' (start without --resume)", path);
+    const FieldCheckpoint checkpoint = load_field_checkpoint(path);
+    const Json extra = parse_json(checkpoint.extra, path);
+    if (!extra.contains("config") || extra["config"].get<std::string>() != run.resolved.dump())
+        throw_error("--resume: '{}' was written with a different scene or configuration", path);
+    const int iteration = extra["iteration"].get<int>();
+    trainer.restore(iteration, checkpoint.parameters, checkpoint.adam);
+    run.log = LossLog::from_json_lines(extra["losses"].get<std::string>(), path);
+    run.log.truncate(iteration);
+    log_info("resuming at iteration {} from {}", iteration, path);
+}
+
+// The end of the matching phase: the asset as matched (`_initialized`), its quality report (the
+// issue's measure is taken here) and, multi-part, the boundary measure.
+void export_matched(const Trainer& trainer, OptimizeRun& run, const TriangleMesh& export_mesh) {
+    const BakedMaps matched_maps = trainer.export_maps();
+    const ExportScale height_scale = asset_export_scale(*run.assets, export_mesh, run.config);  // issue 24
+    write_asset(run.options.output_dir, run.name, "_initialized", matched_maps, export_mesh, run.config,
+                run.face_materials, &height_scale);
+    run.matched_albedo = matched_maps.albedo;
+    run.end_stage("export_matched");
+    const QualityReport matched = trainer.evaluate_held_out();
+    Json initialized = {{"quality", matched.to_json()}, {"iteration", trainer.iteration()}};
+    if (const Json texture = texture_space_quality(trainer, matched_maps); !texture.is_null())
+        initialized["texture_space"] = texture;
+    write_text_atomically(run.base + "_initialized_report.json", initialized.dump(2) + "\n");
+    if (run.parts) {
+        run.boundary_after_matching = run.boundary_json(matched_maps);
+        run.quality_after_matching = run.part_quality(matched_maps, {});
     }
-    const auto save_checkpoint = [&] {
-        const Json extra = {{"inputs", inputs}, {"iteration", trainer.iteration()},  // run safety: input hashes
-                            {"seed", description.seed},
-                            {"config", resolved_text},
-                            {"losses", log.to_json_lines()}};
-        save_field_checkpoint(checkpoint_path, trainer.checkpoint_pieces(), extra.dump());
-    };
-    const auto write_log = [&] {
-        write_text_atomically(base + "_losses.jsonl", log.to_json_lines());
-        write_text_atomically(base + "_loss_plot.svg", log.to_svg(config.init_iterations));
-    };
+    run.end_stage("evaluate_matched");
+    log_info("after matching: albedo PSNR {:.2f} dB (held-out views, foreground), tactile mean cosine {:.4f}",
+             matched.albedo_psnr_foreground, matched.tactile_mean_cosine);
+}
 
-    // Exports go back to the input's coordinates (the scene may normalise the mesh for training).
-    const TriangleMesh export_mesh = assets->export_mesh();
-    // Multi-part: how the learned normal map handles the part boundaries (measure_part_boundary
-    // against each part's own laid map; bleed is meaningful after matching, when the map equals
-    // the composed target; refinement then changes texels everywhere).
-    Json boundary_after_matching;
-    const auto boundary_json = [&](const BakedMaps& m) {
-        const PartBoundaryMeasure b = measure_part_boundary(m.tactile_normal, parts->segmentation.texel_part,
-                                                            parts->segmentation.size, parts->layers);
-        return Json{{"bleed_texels", b.bleed_texels},
-                    {"boundary_step_degrees", b.boundary_step_degrees},
-                    {"hard_cut_step_degrees", b.hard_step_degrees},
-                    {"band_detail_ratio", b.band_detail_ratio}};
-    };
-    Image matched_albedo;  // the after-matching albedo, for the report's spot crops (issue 29)
-    ProgressReporter progress("optimize", std::size_t(config.iterations), 10);
+// The iterations, with checkpoints at phase ends and every checkpoint_every. Returns false when
+// the run stopped before its last iteration (--stop-after), with a checkpoint to resume from.
+bool train(Trainer& trainer, OptimizeRun& run, ProgressReporter& progress, const TriangleMesh& export_mesh) {
+    const RunConfig& config = run.config;
     // Texture evaluation: a matching iteration fits the grid on texels (no rendering), a
     // refinement iteration renders 8 views and calls guidance: measured about 12x the cost.
     if (config.init_iterations < config.iterations)
@@ -346,93 +451,132 @@ void run_optimize(const OptimizeOptions& options) {
                            config.evaluation == FieldEvaluation::Texture ? 12.0 : 1.5);
     progress.start_at(std::size_t(trainer.iteration()));
     const int last_iteration =
-        options.stop_after > 0 ? std::min(options.stop_after, config.iterations) : config.iterations;
+        run.options.stop_after > 0 ? std::min(run.options.stop_after, config.iterations) : config.iterations;
     while (trainer.iteration() < last_iteration) {
         LossRecord record;
         try {
             record = trainer.step();
         } catch (const Error& e) {
             progress.finish();
-            write_log();
-            throw_error("{}; the last good checkpoint is '{}' (continue with --resume)", e.what(), checkpoint_path);
+            run.write_log();
+            throw_error("{}; the last good checkpoint is '{}' (continue with --resume)", e.what(), run.checkpoint_path);
         }
-        log.add(record);
+        run.log.add(record);
         const int done = trainer.iteration();
         std::string status;
         for (const auto& [term, value] : record.terms) status += fmt::format(" {}={:.4g}", term, value);
         progress.advance(1, status);
         const bool phase_end = done == config.init_iterations || done == config.iterations;
         if (phase_end || (config.checkpoint_every > 0 && done % config.checkpoint_every == 0)) {
-            save_checkpoint();
-            write_log();
+            run.save_checkpoint(trainer);
+            run.write_log();
         }
         if (done == config.init_iterations && config.init_iterations < config.iterations) {
             progress.finish();
-            const BakedMaps matched_maps = trainer.export_maps();
-            write_asset(options.output_dir, name, "_initialized", matched_maps, export_mesh, config);
-            matched_albedo = matched_maps.albedo;
-            // The issue's quality measure is taken here, after the matching phase.
-            const QualityReport matched = trainer.evaluate_held_out();
-            Json initialized = {{"quality", matched.to_json()}, {"iteration", done}};
-            if (const Json texture = texture_space_quality(trainer, matched_maps); !texture.is_null())
-                initialized["texture_space"] = texture;
-            write_text_atomically(base + "_initialized_report.json", initialized.dump(2) + "\n");
-            if (parts) boundary_after_matching = boundary_json(matched_maps);
-            log_info("after matching: albedo PSNR {:.2f} dB (held-out views, foreground), tactile mean cosine {:.4f}",
-                     matched.albedo_psnr_foreground, matched.tactile_mean_cosine);
+            run.end_stage("matching");
+            export_matched(trainer, run, export_mesh);
         }
         if (stop_requested()) break;  // run safety: a stop signal ends the run at this iteration boundary
     }
     progress.finish();
-    write_log();
-    if (trainer.iteration() < config.iterations) {
-        save_checkpoint();
-        if (stop_requested()) throw_interrupted(trainer.iteration(), checkpoint_path);  // run safety
-        log_info("stopped after iteration {} as asked; continue with --resume", trainer.iteration());
-        return;
-    }
+    run.write_log();
+    run.end_stage(trainer.iteration() > config.init_iterations ? "refinement" : "matching");
+    if (trainer.iteration() >= config.iterations) return true;
+    run.save_checkpoint(trainer);
+    if (stop_requested()) throw_interrupted(trainer.iteration(), run.checkpoint_path);  // run safety
+    log_info("stopped after iteration {} as asked; continue with --resume", trainer.iteration());
+    return false;
+}
 
+// Multi-part: the label head's prediction at the texels (the exported label map) and the
+// segmentation's, their agreement, and the boundary measures.
+Json part_report(const Trainer& trainer, OptimizeRun& run, const BakedMaps& maps, const std::vector<int>& predicted) {
+    const PartSegmentation& seg = run.parts->segmentation;
+    const RunConfig& config = run.config;
+    Json report = seg.report(run.description.parts);
+    report["label_head_trained"] = trainer.trains_labels();
+    report["legend"] = write_part_maps(run.base, predicted, seg.size, seg.part_names, config.gutter);
+    report["segmentation_legend"] =
+        write_part_maps(run.base + "_segmentation", seg.texel_part, seg.size, seg.part_names, config.gutter);
+    std::size_t agree = 0, labelled = 0;
+    for (std::size_t t = 0; t < predicted.size(); ++t)
+        if (seg.texel_part[t] >= 0) ++labelled, agree += predicted[t] == seg.texel_part[t];
+    report["label_agreement"] = labelled ? double(agree) / double(labelled) : 0.0;
+    if (config.init_iterations == config.iterations) run.boundary_after_matching = run.boundary_json(maps);
+    if (!run.boundary_after_matching.is_null()) report["boundary_after_matching"] = run.boundary_after_matching;
+    report["boundary_final"] = run.boundary_json(maps);
+    log_info("parts: label map agrees with the segmentation on {:.2f} % of covered texels; {}_label_map.png, "
+             "{}_label_legend.json, {}_mask_<part>.png",
+             100.0 * report["label_agreement"].get<double>(), run.name, run.name, run.name);
+    return report;
+}
+
+// The finished asset, its turntable, <name>_report.json and <name>_report.html.
+void export_final(Trainer& trainer, OptimizeRun& run, const ProgressReporter& progress,
+                  const TriangleMesh& export_mesh) {
+    const RunConfig& config = run.config;
     trainer.release_training_buffers();
     const BakedMaps maps = trainer.export_maps();
-    write_asset(options.output_dir, name, "", maps, export_mesh, config);
+    const ExportScale height_scale = asset_export_scale(*run.assets, export_mesh, config);  // issue 24
+    const Json height_json =
+        write_asset(run.options.output_dir, run.name, "", maps, export_mesh, config, run.face_materials, &height_scale);
+    run.end_stage("export");
     const QualityReport quality = trainer.evaluate_held_out();
-    write_turntable(options.output_dir, assets->mesh, *assets->scene, maps, config.turntable_views,
+    run.end_stage("evaluate");
+    write_turntable(run.options.output_dir, run.assets->mesh, *run.assets->scene, maps, config.turntable_views,
                     config.turntable_resolution);
+    run.end_stage("turntable");
     Json report = {{"quality", quality.to_json()},
-                         {"seconds_per_iteration", trainer.stage_times().to_json(trainer.iteration())},
-                         {"seconds_total", progress.elapsed_seconds()},
-                         {"seed", description.seed},
-                         {"threads", ThreadLimit::current()}};
+                   {"seconds_per_iteration", trainer.stage_times().to_json(trainer.iteration())},
+                   {"seconds_total", progress.elapsed_seconds()},
+                   {"seed", run.description.seed},
+                   {"threads", ThreadLimit::current()}};
+    if (!height_json.is_null()) report["height_map"] = height_json;
+    if (const Json touch = tactile_roundtrip(run.options.output_dir, *run.assets, height_scale, run.description.seed);
+        !touch.is_null())
+        report["tactile_roundtrip"] = touch;
     if (const Json texture = texture_space_quality(trainer, maps); !texture.is_null()) {
         report["texture_space"] = texture;
-        report["colour"] = colour_check(trainer, maps.albedo, matched_albedo, base, quality, texture);
+        report["colour"] = colour_check(trainer, maps.albedo, run.matched_albedo, run.base, quality, texture);
     }
-    if (parts) {
-        // The label head's prediction at the texels (the exported label map) and the segmentation's.
-        const PartSegmentation& seg = parts->segmentation;
+    if (run.parts) {
         const std::vector<int> predicted = trainer.predicted_texel_parts();
-        Json part_report = seg.report(description.parts);
-        part_report["label_head_trained"] = trainer.trains_labels();
-        part_report["legend"] = write_part_maps(base, predicted, seg.size, seg.part_names, config.gutter);
-        part_report["segmentation_legend"] =
-            write_part_maps(base + "_segmentation", seg.texel_part, seg.size, seg.part_names, config.gutter);
-        std::size_t agree = 0, labelled = 0;
-        for (std::size_t t = 0; t < predicted.size(); ++t)
-            if (seg.texel_part[t] >= 0) ++labelled, agree += predicted[t] == seg.texel_part[t];
-        part_report["label_agreement"] = labelled ? double(agree) / double(labelled) : 0.0;
-        if (config.init_iterations == config.iterations) boundary_after_matching = boundary_json(maps);
-        if (!boundary_after_matching.is_null()) part_report["boundary_after_matching"] = boundary_after_matching;
-        part_report["boundary_final"] = boundary_json(maps);
-        report["parts"] = part_report;
-        log_info("parts: label map agrees with the segmentation on {:.2f} % of covered texels; {}_label_map.png, "
-                 "{}_label_legend.json, {}_mask_<part>.png",
-                 100.0 * part_report["label_agreement"].get<double>(), name, name, name);
+        report["part_segmentation"] = part_report(trainer, run, maps, predicted);
+        report["parts"] = write_part_report_entries(run.base, run.part_quality(maps, predicted),
+                                                    run.quality_after_matching, run.parts->layers);
     }
-    write_text_atomically(base + "_report.json", report.dump(2) + "\n");
+    run.end_stage("measures");
+    report["stages"] = run.stages_json();  // the page below is timed by its own log line
+    write_text_atomically(run.base + "_report.json", report.dump(2) + "\n");
     log_info("held-out quality: albedo PSNR {:.2f} dB (foreground), tactile mean cosine {:.4f}; report in {}_report.json",
-             quality.albedo_psnr_foreground, quality.tactile_mean_cosine, base);
-    write_optimize_report(options.output_dir, name, options.scene_path, *assets, config);  // <name>_report.html
-    guard.complete({{"report", name + "_report.json"}});  // run safety: the completion record, written last
+             quality.albedo_psnr_foreground, quality.tactile_mean_cosine, run.base);
+    write_optimize_report(run.options.output_dir, run.name, run.options.scene_path, *run.assets, config);
+    run.end_stage("report_page");
+    std::string line;
+    for (const auto& stage : run.stages)
+        line += fmt::format("{}{} {:.1f}", line.empty() ? "" : ", ", stage.name, stage.seconds);
+    log_info("stages (wall s): {}; peak memory {:.0f} MB", line, run.stages.back().peak_mb);
+}
+
+}  // namespace
+
+void run_optimize(const OptimizeOptions& options) {
+    OptimizeRun run(options);
+    // Run safety (docs/commands/optimize.md "Runs that survive"): lock, temporaries, completion record.
+    const RunGuard guard(options.output_dir, run.name, "optimize");
+    load_inputs(run);
+    prepare_parts(run);
+    write_resolved_config(run);
+    Trainer trainer(run.target, run.config, run.description.seed);
+    attach_guidance(trainer, run);
+    if (options.resume) resume_from_checkpoint(trainer, run);
+    run.end_stage("setup");
+    // Exports go back to the input's coordinates (the scene may normalise the mesh for training).
+    const TriangleMesh export_mesh = run.assets->export_mesh();
+    ProgressReporter progress("optimize", std::size_t(run.config.iterations), 10);
+    if (!train(trainer, run, progress, export_mesh)) return;
+    export_final(trainer, run, progress, export_mesh);
+    guard.complete({{"report", run.name + "_report.json"}});  // run safety: the completion record, written last
 }
 
 }  // namespace tdf

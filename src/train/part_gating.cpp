@@ -41,7 +41,7 @@ PartGate::PartGate(int size, std::vector<PartGuidance> parts) : m_size(size) {
 }
 
 void PartGate::set_parts(std::vector<PartGuidance> parts) {
-    TDF_CHECK(parts.size() >= 2 && parts.size() < 32768);
+    TDF_CHECK(!parts.empty() && parts.size() < 32768);
     TDF_CHECK(m_parts.empty() || parts.size() == m_parts.size());
     m_parts = std::move(parts);
 }

@@ -68,7 +68,7 @@ double softmax_cross_entropy(const float* logits, int count, int label, float sc
 }
 
 PartLabelHead::PartLabelHead(int parts, int features, std::uint64_t seed) : m_parts(parts), m_features(features) {
-    if (parts < 2) throw_error("part label head: {} parts (at least 2)", parts);
+    if (parts < 1) throw_error("part label head: {} parts (at least 1)", parts);
     TDF_CHECK(features >= 1);
     m_parameters.resize(std::size_t(parts) * std::size_t(features + 1));
     Rng rng(seed ^ 0x6c6162656cULL);  // "label": a stream of its own, not the field's

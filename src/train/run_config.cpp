@@ -23,6 +23,56 @@ T choose(ConfigReader& reader, const std::string& key, T fallback,
     throw_error("{}: '{}' must be one of {}, got '{}'", reader.where(), key, valid, value);
 }
 
+// optimize.training_light: "random" (the default) or a fixed light {elevation_degrees,
+// azimuth_degrees, distance}.
+void read_training_light(ConfigReader& r, const std::string& source, RunConfig& c) {
+    if (!r.has("training_light")) return;
+    const Json& light = r.raw("training_light");
+    if (light.is_string() && light.get<std::string>() == "random") {
+        c.fixed_training_light = false;
+    } else if (light.is_object()) {
+        ConfigReader lr(light, source + ": optimize.training_light");
+        c.fixed_training_light = true;
+        c.light_elevation_degrees = lr.get("elevation_degrees", c.light_elevation_degrees);
+        c.light_azimuth_degrees = lr.get("azimuth_degrees", c.light_azimuth_degrees);
+        c.light_distance = lr.get("distance", c.light_distance);
+        lr.check_all_read();
+    } else {
+        throw_error("{}: optimize.training_light must be \"random\" or an object "
+                    "{{\"elevation_degrees\", \"azimuth_degrees\", \"distance\"}}", source);
+    }
+}
+
+// The guidance section is validated by the backends themselves; here only the names.
+void read_guidance_names(const Json& guidance, const std::string& source, RunConfig& c) {
+    if (guidance.is_object()) {
+        const std::vector<std::string> backends = GuidanceBackend::names();
+        for (auto it = guidance.begin(); it != guidance.end(); ++it) {
+            const std::string& key = it.key();
+            const bool known = key == "visual" || key == "tactile" || key == "save_frames" ||
+                               std::find(backends.begin(), backends.end(), key) != backends.end();
+            if (!known)
+                throw_error("{}: guidance: unknown key '{}' (expected visual, tactile, save_frames or a backend name)",
+                            source, key);
+        }
+        c.guidance_config = guidance;
+        if (guidance.contains("visual")) {
+            if (!guidance["visual"].is_string()) throw_error("{}: guidance.visual must be a backend name", source);
+            c.guidance_visual = guidance["visual"].get<std::string>();
+        }
+        if (guidance.contains("tactile")) {
+            if (!guidance["tactile"].is_string()) throw_error("{}: guidance.tactile must be a backend name", source);
+            c.guidance_tactile = guidance["tactile"].get<std::string>();
+        }
+        if (guidance.contains("save_frames")) {
+            if (!guidance["save_frames"].is_boolean()) throw_error("{}: guidance.save_frames must be true or false", source);
+            c.save_guidance_frames = guidance["save_frames"].get<bool>();
+        }
+    } else if (!guidance.is_null()) {
+        throw_error("{}: 'guidance' must be an object", source);
+    }
+}
+
 }  // namespace
 
 RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout, const Json& exporting,
@@ -71,22 +121,7 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.patch_distance = r.get("patch_distance", c.patch_distance);
     c.max_ssaa = r.get("max_ssaa", c.max_ssaa);
     c.learning_rate = r.get("learning_rate", c.learning_rate);
-    if (r.has("training_light")) {
-        const Json& light = r.raw("training_light");
-        if (light.is_string() && light.get<std::string>() == "random") {
-            c.fixed_training_light = false;
-        } else if (light.is_object()) {
-            ConfigReader lr(light, source + ": optimize.training_light");
-            c.fixed_training_light = true;
-            c.light_elevation_degrees = lr.get("elevation_degrees", c.light_elevation_degrees);
-            c.light_azimuth_degrees = lr.get("azimuth_degrees", c.light_azimuth_degrees);
-            c.light_distance = lr.get("distance", c.light_distance);
-            lr.check_all_read();
-        } else {
-            throw_error("{}: optimize.training_light must be \"random\" or an object "
-                        "{{\"elevation_degrees\", \"azimuth_degrees\", \"distance\"}}", source);
-        }
-    }
+    read_training_light(r, source, c);
     c.albedo_range_radius = r.get("albedo_range_radius", c.albedo_range_radius);
     c.albedo_range_lighten = r.get("albedo_range_lighten", c.albedo_range_lighten);
     c.albedo_range_darken = r.get("albedo_range_darken", c.albedo_range_darken);
@@ -127,33 +162,7 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.turntable_resolution = e.get("turntable_resolution", c.turntable_resolution);
     e.check_all_read();
 
-    // The guidance section is validated by the backends themselves; here only the names.
-    if (guidance.is_object()) {
-        const std::vector<std::string> backends = GuidanceBackend::names();
-        for (auto it = guidance.begin(); it != guidance.end(); ++it) {
-            const std::string& key = it.key();
-            const bool known = key == "visual" || key == "tactile" || key == "save_frames" ||
-                               std::find(backends.begin(), backends.end(), key) != backends.end();
-            if (!known)
-                throw_error("{}: guidance: unknown key '{}' (expected visual, tactile, save_frames or a backend name)",
-                            source, key);
-        }
-        c.guidance_config = guidance;
-        if (guidance.contains("visual")) {
-            if (!guidance["visual"].is_string()) throw_error("{}: guidance.visual must be a backend name", source);
-            c.guidance_visual = guidance["visual"].get<std::string>();
-        }
-        if (guidance.contains("tactile")) {
-            if (!guidance["tactile"].is_string()) throw_error("{}: guidance.tactile must be a backend name", source);
-            c.guidance_tactile = guidance["tactile"].get<std::string>();
-        }
-        if (guidance.contains("save_frames")) {
-            if (!guidance["save_frames"].is_boolean()) throw_error("{}: guidance.save_frames must be true or false", source);
-            c.save_guidance_frames = guidance["save_frames"].get<bool>();
-        }
-    } else if (!guidance.is_null()) {
-        throw_error("{}: 'guidance' must be an object", source);
-    }
+    read_guidance_names(guidance, source, c);
     c.validate(source);
     return c;
 }

@@ -68,7 +68,7 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
         if (!stage.frames.empty()) r.turntables.push_back(std::move(stage));
     }
     for (const char* postfix : {"", "_initialized"})
-        for (const char* map : {"_albedo.png", "_tactile_normal.png"}) {
+        for (const char* map : {"_albedo.png", "_tactile_normal.png", "_height.png"}) {
             const std::string path = base + postfix + map;
             if (exists(path)) r.maps.push_back({fs::path(path).filename().string(), path});
         }
@@ -98,7 +98,20 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
             }
             report.erase("colour");
         }
-        report.erase("quality");
+        for (const char* key : {"height_map", "tactile_roundtrip"})
+            if (report.contains(key)) {
+                (std::string(key) == "height_map" ? r.height_map : r.tactile_roundtrip) = report[key];
+                report.erase(key);
+            }
+        if (!r.tactile_roundtrip.empty()) {
+            const std::string capture = folder + "/touch/capture_gelsight.png";
+            if (exists(capture)) r.touches.push_back({"input capture (the scene's tactile map)", capture});
+            for (int k = 0; exists(fmt::format("{}/touch/touch_{:03d}_gelsight.png", folder, k)); ++k)
+                r.touches.push_back({fmt::format("virtual GelSight touch {} of the exported asset", k),
+                                     fmt::format("{}/touch/touch_{:03d}_gelsight.png", folder, k)});
+        }
+        if (report.contains("parts") && report["parts"].is_array()) r.parts = report["parts"];
+        for (const char* key : {"quality", "parts", "part_segmentation"}) report.erase(key);
         r.timings = report;
     }
     if (exists(base + "_config.json")) r.config = load_json_file(base + "_config.json");

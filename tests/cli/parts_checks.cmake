@@ -30,3 +30,59 @@ foreach(_dir none select k size empty)
     message(FATAL_ERROR "a failed 'tdf parts' left a label map in ${OUT_DIR}/${_dir}")
   endif()
 endforeach()
+
+# Issue 23: bad multi-part input to `tdf optimize` on scenes/four_part_sphere (scenes written
+# here with absolute paths): one line naming the part (or key) and the scene file, exit 1, and
+# nothing in the output folder but the run's lock file (docs/commands/optimize.md).
+set(_four ${SOURCE_DIR}/scenes/four_part_sphere)
+set(_head "{\"mesh\":\"${_four}/sphere.obj\",\"albedo\":{\"source\":\"image\",\"image\":\"${_four}/albedo.png\"},\"tactile\":{\"images\":[\"${_four}/ribs_normal.png\"]},")
+function(part_json out name map select)
+  set(${out} "{\"name\":\"${name}\",\"tactile\":{\"images\":[\"${_four}/${map}_normal.png\"]},\"select\":[\"${select}\"]}" PARENT_SCOPE)
+endfunction()
+function(check_nothing_written dir)
+  file(GLOB _left RELATIVE ${dir} ${dir}/*)
+  list(REMOVE_ITEM _left .tdf.lock)
+  if(_left)
+    message(FATAL_ERROR "a failed 'tdf optimize' left ${_left} in ${dir}")
+  endif()
+endfunction()
+# More parts than the label head supports (64).
+set(_list "")
+foreach(_k RANGE 64)
+  part_json(_p "p${_k}" ribs ribs)
+  string(APPEND _list "${_p},")
+endforeach()
+string(REGEX REPLACE ",$" "" _list "${_list}")
+file(WRITE ${OUT_DIR}/many.json "${_head}\"parts\":{\"source\":{\"kind\":\"mesh\"},\"list\":[${_list}]}}")
+check(1 "many.json.parts: 'list' has 65 parts; at most 64 are supported" "" ${TDF} --quiet optimize ${OUT_DIR}/many.json -o ${OUT_DIR}/many)
+check_nothing_written(${OUT_DIR}/many)
+# Two parts naming the same material of the mesh.
+part_json(_a ribs ribs ribs)
+part_json(_b dimples dimples ribs)
+file(WRITE ${OUT_DIR}/twice.json "${_head}\"parts\":{\"source\":{\"kind\":\"mesh\"},\"list\":[${_a},${_b}]}}")
+check(1 "twice.json.parts: 'ribs' is selected by both 'ribs' and 'dimples'" "" ${TDF} --quiet optimize ${OUT_DIR}/twice.json -o ${OUT_DIR}/twice)
+check_nothing_written(${OUT_DIR}/twice)
+# A label image with a colour (yellow, the grain band) that no part's select names.
+part_json(_a ribs ribs "#ff0000")
+part_json(_b dimples dimples "#00ff00")
+part_json(_c weave weave "#0000ff")
+file(WRITE ${OUT_DIR}/legend.json
+     "${_head}\"parts\":{\"source\":{\"kind\":\"label_image\",\"image\":\"${_four}/label_image.png\"},\"list\":[${_a},${_b},${_c}]}}")
+check(1 "legend.json: parts: region '#ffff00' \\(25.0 % of the surface\\) is selected by no part" ""
+      ${TDF} --quiet optimize ${OUT_DIR}/legend.json -o ${OUT_DIR}/legend)
+check_nothing_written(${OUT_DIR}/legend)
+# A part whose only face covers no texel of a 16 x 16 atlas (face 0 at the pole).
+file(STRINGS ${_four}/labels.txt _labels REGEX "^[a-z]")
+list(LENGTH _labels _n)
+math(EXPR _n "${_n} - 1")
+file(WRITE ${OUT_DIR}/one_face.txt "b\n")
+foreach(_i RANGE 1 ${_n})
+  file(APPEND ${OUT_DIR}/one_face.txt "a\n")
+endforeach()
+part_json(_a a ribs a)
+part_json(_b b grain b)
+file(WRITE ${OUT_DIR}/tiny.json
+     "${_head}\"parts\":{\"source\":{\"kind\":\"face_labels\",\"file\":\"${OUT_DIR}/one_face.txt\"},\"list\":[${_a},${_b}]}}")
+check(1 "tiny.json: parts.list\\[1\\]: part 'b' has no faces large enough to cover a texel" ""
+      ${TDF} --quiet optimize ${OUT_DIR}/tiny.json -o ${OUT_DIR}/tiny export.texture_size=16)
+check_nothing_written(${OUT_DIR}/tiny)

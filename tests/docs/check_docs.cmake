@@ -1,10 +1,12 @@
 # Checks the manual against the tool. Run by ctest (tests/docs.cmake):
 #   cmake -DTDF=build/tdf -DSOURCE_DIR=. -DCHECK=options -P tests/docs/check_docs.cmake
 #   cmake -DSOURCE_DIR=. -DCHECK=links -P tests/docs/check_docs.cmake
-# options: for `tdf help` and every command and nested command it lists, each option of its
+# options: for `tdf help` and every command and nested command it lists, the block holds the help's
+#   description ("What it does: ..."), each option of its
 #   "Options:" section must have a row `| `-o, --output` |` in the page's block for that command
 #   (docs/commands/<top command>.md; the global options in docs/commands/README.md), between
-#   "<!-- options: tdf help <command> ..." and "<!-- /options -->" (scripts/docs-options.py writes them).
+#   "<!-- options: tdf help <command> ..." and "<!-- /options -->" (scripts/docs-options.py writes them);
+#   and the command list of docs/commands/README.md gives each command its description from `tdf help`.
 # links: every relative link ](path) or ](path#anchor) in README.md and docs/**/*.md must name an
 #   existing file or folder (anchors are not checked).
 cmake_minimum_required(VERSION 3.20)
@@ -62,8 +64,18 @@ function(check_command)  # ARGN: the command words (none = the global options)
   string(FIND "${_block}" "<!-- /options -->" _end)
   string(SUBSTRING "${_block}" 0 ${_end} _block)
 
-  section_lines(_options "${_help}" "Options")
   set(_local_errors "")
+  # The command's description (the help's first line, unless it starts with Usage) is in its block.
+  string(REGEX MATCH "^[^\n]*" _description "${_help}")
+  if(NOT _description MATCHES "^Usage:")
+    string(REPLACE "|" "\\|" _described "${_description}")
+    string(FIND "${_block}" "What it does: ${_described}" _at)
+    if(_at EQUAL -1)
+      string(APPEND _local_errors "${_page}: the description of `tdf help ${_words}` (\"${_description}\") is not in its options block\n")
+    endif()
+  endif()
+
+  section_lines(_options "${_help}" "Options")
   foreach(_l IN LISTS _options)
     # An option line starts with two spaces and a dash: "  -o,--output TEXT ...", "  --png".
     if(_l MATCHES "^  (-[^ ]+)")
@@ -77,8 +89,17 @@ function(check_command)  # ARGN: the command words (none = the global options)
 
   section_lines(_subs "${_help}" "Subcommands")
   foreach(_l IN LISTS _subs)
-    if(_l MATCHES "^  ([a-z][a-z0-9_-]*)")
-      check_command(${ARGN} ${CMAKE_MATCH_1})
+    if(_l MATCHES "^  ([a-z][a-z0-9_-]*) +(.*)$")
+      set(_sub ${CMAKE_MATCH_1})
+      set(_sub_description "${CMAKE_MATCH_2}")
+      if(ARGC EQUAL 0)
+        # The command list of docs/commands/README.md says what each command does in the help's words.
+        string(FIND "${_text}" "| `tdf ${_sub}` | ${_sub_description}" _at)
+        if(_at EQUAL -1)
+          string(APPEND _local_errors "${_page}: the row of `tdf ${_sub}` does not start with its description in `tdf help` (\"${_sub_description}\")\n")
+        endif()
+      endif()
+      check_command(${ARGN} ${_sub})
     endif()
   endforeach()
   set(_errors "${_errors}${_local_errors}" PARENT_SCOPE)

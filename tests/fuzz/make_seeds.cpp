@@ -67,7 +67,7 @@ void obj_seeds() {
     seed("obj", "huge_numbers.obj", "v 1e39 -1e39 nan\nv inf 0 0\nv 0 1 0\nf 1 2 3\nf 99999999999 1 2\n");
     seed("obj", "empty.obj", "");
     const std::string sphere = scratch("sphere.obj");
-    write_obj(sphere, make_uv_sphere(1.f, 6, 4), ObjMaterial{"material", "albedo.png", "normal.png"});
+    write_obj(sphere, make_uv_sphere(1.f, 6, 4), ObjMaterial{"material", "albedo.png", "normal.png", "", 0, 0});
     seed("obj", "sphere.obj", read_text_file(sphere) + kSep + read_text_file(scratch("sphere.mtl")));
 }
 

@@ -122,6 +122,24 @@ TEST(BatchEngine, ExitCodesAndSignalsClassifyAJobsEnd) {
     EXPECT_EQ(classify_job_end(-1, SIGTERM, true), JobEnd::FailedResource);
 }
 
+// A state's status follows from how its attempt ended: recorded together, they cannot disagree.
+TEST(BatchEngine, AnEndedAttemptSetsClassAndStatusTogether) {
+    const std::pair<JobEnd, JobStatus> expected[] = {{JobEnd::Done, JobStatus::Done},
+                                                     {JobEnd::FailedInput, JobStatus::Failed},
+                                                     {JobEnd::FailedResource, JobStatus::Failed},
+                                                     {JobEnd::Preempted, JobStatus::Interrupted}};
+    for (const auto& [end, status] : expected) {
+        JobState state;
+        state.status = JobStatus::Running;
+        state.end_attempt(end);
+        EXPECT_EQ(state.end, end) << job_end_name(end);
+        EXPECT_EQ(state.status, status) << job_end_name(end);
+        const JobState read = JobState::from_json(state.to_json());
+        EXPECT_EQ(read.status, status) << job_end_name(end);
+        EXPECT_EQ(read.end, end) << job_end_name(end);
+    }
+}
+
 TEST(BatchEngine, StatesWrittenBeforeClassesGetOneFromTheirExit) {
     EXPECT_EQ(JobState::from_json({{"status", "failed"}, {"exit_code", 1}, {"attempts", 2}}).end,
               JobEnd::FailedInput);

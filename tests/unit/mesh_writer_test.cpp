@@ -4,9 +4,12 @@
 #include <tdf/mesh/mesh_io.h>
 #include <tdf/mesh/mesh_writer.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <map>
+#include <set>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -32,7 +35,7 @@ TriangleMesh coloured_quad() {
 TEST(MeshWriter, ObjRoundTripKeepsGeometryUvsColoursAndNamesBothMaps) {
     const TriangleMesh mesh = coloured_quad();
     const std::string path = test::scratch_dir() + "/writer_quad.obj";
-    write_obj(path, mesh, ObjMaterial{"mat", "albedo.png", "normal.png"});
+    write_obj(path, mesh, ObjMaterial{"mat", "albedo.png", "normal.png", "", 0, 0});
     MeshLoadOptions options;
     options.load_textures = false;
     const TriangleMesh loaded = load_obj(path, options);
@@ -157,7 +160,7 @@ TEST(MeshWriter, ObjWritesTheRendererNormalsAndTheInputGroups) {
     mesh.face_groups = {FaceGroup{"body", "front", "cloth"}, FaceGroup{"body", "back", "cloth"}};
     mesh.face_group = {0, 1};
     const std::string path = test::scratch_dir() + "/writer_normals.obj";
-    write_obj(path, mesh, ObjMaterial{"mat", "albedo.png", "normal.png"});
+    write_obj(path, mesh, ObjMaterial{"mat", "albedo.png", "normal.png", "", 0, 0});
     const std::string text = read_text_file(path);
     std::vector<Vec3f> normals;
     std::istringstream lines(text);
@@ -243,5 +246,104 @@ TEST(MeshWriter, GlbKeepsTheInputNodesAndWritesPositionsInNodeCoordinates) {
             }
             EXPECT_LT(length(a - b), 1e-5f) << "face " << f;
         }
+    }
+}
+
+// Issue 24: the height map and its scale travel with the asset. The MTL names it as
+// `disp -mm base gain` (mesh units); the GLB embeds its very bytes as an image no texture
+// uses, and names it with the scale under the material's extras (glTF core has no
+// displacement), leaving the core textures as they were.
+TEST(MeshWriter, HeightMapGoesToTheMtlAsDispAndToTheGlbExtras) {
+    const TriangleMesh mesh = coloured_quad();
+    ObjMaterial material;
+    material.albedo_map = "q_albedo.png";
+    material.normal_map = "q_normal.png";
+    material.height_map = "q_height.png";
+    material.height_base = -0.0125, material.height_gain = 0.05;
+    const std::string obj = test::scratch_dir() + "/writer_height.obj";
+    write_obj(obj, mesh, material);
+    const std::string mtl = read_text_file(test::scratch_dir() + "/writer_height.mtl");
+    EXPECT_NE(mtl.find("disp -mm -0.0125 0.05 q_height.png\n"), std::string::npos) << mtl;
+    EXPECT_NE(mtl.find("map_Bump -bm 1 q_normal.png\n"), std::string::npos) << mtl;
+
+    GlbMaps maps;
+    maps.albedo_png = encode_png_bytes(Image(2, 2, 3, 0.3f), Quantize::Truncate);
+    maps.normal_png = encode_png_bytes(Image(2, 2, 3, 0.5f), Quantize::Truncate);
+    maps.height_png = "not really a png, but embedded byte for byte";
+    maps.height_extras = {{"mm_per_unit", 25.0}, {"min_mm", -0.3}, {"max_mm", 0.9}};
+    const std::string path = test::scratch_dir() + "/writer_height.glb";
+    write_glb(path, mesh, maps);
+    const GlbFile glb = read_glb(path);
+    ASSERT_EQ(glb.json["images"].size(), 3u);
+    ASSERT_EQ(glb.json["textures"].size(), 2u);  // the height is no core texture
+    const auto& extras = glb.json["materials"][0]["extras"]["tdf_height"];
+    ASSERT_TRUE(extras.is_object()) << glb.json["materials"][0].dump();
+    EXPECT_EQ(extras["mm_per_unit"].get<double>(), 25.0);
+    EXPECT_EQ(extras["max_mm"].get<double>(), 0.9);
+    const std::size_t image = extras["image"].get<std::size_t>();
+    EXPECT_EQ(view_bytes(glb, glb.json["images"][image]["bufferView"]), maps.height_png);
+    EXPECT_EQ(glb.json["materials"][0]["normalTexture"]["index"].get<int>(), 1);
+}
+
+TEST(MeshWriter, OneMaterialAndPrimitivePerPartInObjAndGlb) {
+    // scenes/four_part_sphere's mesh with its four bands as parts, numbered in another order
+    // than the input's materials and named apart from them, so what comes back is the parts'.
+    MeshLoadOptions options;
+    options.load_textures = false;
+    const TriangleMesh mesh = load_mesh(test::source_dir() + "/scenes/four_part_sphere/sphere.obj", options);
+    const std::vector<std::string> bands = {"grain", "weave", "dimples", "ribs"};
+    FaceMaterials parts;
+    parts.names = {"part_grain", "part_weave", "part_dimples", "part_ribs"};
+    std::map<std::string, std::size_t> faces_of;
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+        const std::string band = mesh.face_groups[std::size_t(mesh.face_group[f])].material;
+        const int k = int(std::find(bands.begin(), bands.end(), band) - bands.begin());
+        ASSERT_LT(k, 4) << band;
+        parts.face_material.push_back(k);
+        ++faces_of[parts.names[std::size_t(k)]];
+    }
+    ObjMaterial material;
+    material.albedo_map = "a.png";
+    material.normal_map = "n.png";
+    const std::string obj = test::scratch_dir() + "/writer_parts.obj", glb = test::scratch_dir() + "/writer_parts.glb";
+    write_obj(obj, mesh, material, parts);
+    write_glb(glb, mesh, GlbMaps{}, parts);
+
+    // OBJ: faces in their order, each under its part's usemtl; every MTL material names both maps.
+    const TriangleMesh from_obj = load_mesh(obj, options);
+    ASSERT_EQ(from_obj.triangles.size(), mesh.triangles.size());
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+        ASSERT_EQ(from_obj.face_groups[std::size_t(from_obj.face_group[f])].material,
+                  parts.names[std::size_t(parts.face_material[f])]) << "face " << f;
+    const std::string mtl = read_text_file(test::scratch_dir() + "/writer_parts.mtl");
+    for (const std::string& name : parts.names) EXPECT_NE(mtl.find("newmtl " + name + "\n"), std::string::npos) << name;
+    std::size_t normal_maps = 0;
+    for (std::size_t at = mtl.find("norm n.png"); at != std::string::npos; at = mtl.find("norm n.png", at + 1)) ++normal_maps;
+    EXPECT_EQ(normal_maps, 4u);
+
+    // GLB: four materials named as the parts, one primitive per part, each on its material.
+    const GlbFile file = read_glb(glb);
+    ASSERT_EQ(file.json["materials"].size(), 4u);
+    for (std::size_t k = 0; k < 4; ++k) EXPECT_EQ(file.json["materials"][k]["name"], parts.names[k]);
+    ASSERT_EQ(file.json["meshes"].size(), 1u);
+    const auto& primitives = file.json["meshes"][0]["primitives"];
+    ASSERT_EQ(primitives.size(), 4u);
+    std::set<int> used;
+    for (const auto& p : primitives) used.insert(p["material"].get<int>());
+    EXPECT_EQ(used.size(), 4u);
+    const TriangleMesh from_glb = load_mesh(glb, options);
+    std::map<std::string, std::size_t> glb_faces_of;
+    for (std::size_t f = 0; f < from_glb.triangles.size(); ++f)
+        ++glb_faces_of[from_glb.face_groups[std::size_t(from_glb.face_group[f])].material];
+    EXPECT_EQ(glb_faces_of, faces_of);
+
+    // A face count that does not match is refused in one line naming the file.
+    parts.face_material.pop_back();
+    try {
+        write_glb(test::scratch_dir() + "/writer_parts_bad.glb", mesh, GlbMaps{}, parts);
+        FAIL() << "accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("writer_parts_bad.glb"), std::string::npos) << e.what();
+        EXPECT_FALSE(std::filesystem::exists(test::scratch_dir() + "/writer_parts_bad.glb"));
     }
 }

@@ -158,7 +158,7 @@ TEST_P(TangentHandedness, MirroredChartHasTheSameReliefInTdfGltfTangentsAndMikkT
         for (int c = 0; c < 3; ++c) encoded.data()[3 * p + std::size_t(c)] = (kTilt[c] + 1.f) * 0.5f;
     const std::string folder = test::scratch_dir();
     write_png(folder + "/" + name + "_normal.png", encoded, 8, Quantize::Truncate);
-    write_obj(folder + "/" + name + ".obj", mesh, ObjMaterial{"tilted", "", name + "_normal.png"});
+    write_obj(folder + "/" + name + ".obj", mesh, ObjMaterial{"tilted", "", name + "_normal.png", "", 0, 0});
     GlbMaps maps;
     maps.normal_png = read_text_file(folder + "/" + name + "_normal.png");
     const std::string path = folder + "/" + name + ".glb";

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 using namespace tdf;
 
@@ -108,4 +109,53 @@ TEST(TextureGradient, AssignRebuildsThePyramidInPlace) {
     for (int k = 0; k < tex.level_count(); ++k)
         for (std::size_t i = 0; i < fresh.level(k).values().size(); ++i)
             ASSERT_FLOAT_EQ(tex.level(k).values()[i], fresh.level(k).values()[i]) << "level " << k;
+}
+
+// The banded scatter (the trainer runs one band per thread) must give the same bits as add() in
+// one pass, for any band count, since each texel still gets its sums in the taps' order.
+TEST(TextureGradient, BandedScatterGivesTheSameBitsAsOnePass) {
+    const MipTexture tex(random_image(37, 29, 4, 3, 0.0f, 1.0f));
+    const std::vector<Lookup> lookups = random_lookups(3000, 17);
+    std::vector<float> g(lookups.size() * 4);
+    Rng rng(23);
+    for (float& v : g) v = rng.uniform() * 2.f - 1.f;
+    std::vector<TrilinearTaps> taps(lookups.size());
+    for (std::size_t k = 0; k < lookups.size(); ++k) tex.taps(lookups[k].uv, lookups[k].lod, -1, taps[k]);
+    MipGradient one_pass;
+    one_pass.reset(tex);
+    for (std::size_t k = 0; k < lookups.size(); ++k) one_pass.add(taps[k], &g[4 * k]);
+    for (int count : {1, 2, 3, 8}) {
+        MipGradient banded;
+        banded.reset(tex);
+        const MipGradient::Bands bands = banded.bands(count);
+        for (int band = count - 1; band >= 0; --band)  // any band order: the bands are disjoint
+            for (std::size_t k = 0; k < lookups.size(); ++k) banded.add_band(taps[k], &g[4 * k], bands, band);
+        for (int level = 0; level < tex.level_count(); ++level) {
+            const std::vector<float>& a = one_pass.level(level).values();
+            const std::vector<float>& b = banded.level(level).values();
+            ASSERT_EQ(a.size(), b.size());
+            std::size_t differing = 0;
+            for (std::size_t i = 0; i < a.size(); ++i) differing += std::memcmp(&a[i], &b[i], sizeof(float)) != 0;
+            EXPECT_EQ(differing, 0u) << count << " bands, level " << level;
+        }
+    }
+}
+
+// The learned maps are composed into a texture's own level 0 and its mips rebuilt in place
+// (LearnedMaps::update), and the trainer's targets are moved into their textures: both must give
+// the very pyramid a texture built from a copy of the image gives.
+TEST(TextureGradient, MovedImageAndInPlaceRebuildGiveTheSamePyramid) {
+    const Image a = random_image(21, 13, 3, 4, 0.0f, 1.0f), b = random_image(21, 13, 3, 5, 0.0f, 1.0f);
+    const MipTexture fresh(b);
+    MipTexture moved(Image{b});
+    MipTexture edited(a);
+    edited.base_level() = b;
+    edited.rebuild_levels();
+    for (const MipTexture* tex : {&moved, &edited}) {
+        ASSERT_EQ(tex->level_count(), fresh.level_count());
+        for (int k = 0; k < fresh.level_count(); ++k)
+            ASSERT_EQ(0, std::memcmp(tex->level(k).data(), fresh.level(k).data(),
+                                     fresh.level(k).values().size() * sizeof(float)))
+                << "level " << k;
+    }
 }

@@ -69,9 +69,9 @@ TEST(ScenePartsSpec, BadInputIsOneLineNamingTheKey) {
         EXPECT_NE(msg.find(needle), std::string::npos) << msg;
         EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
     };
-    Json one = two_parts();
-    one["parts"]["list"].erase(1);
-    expect(one, "at least 2 are needed");
+    Json none = two_parts();
+    none["parts"]["list"] = Json::array();
+    expect(none, "'list' is empty; at least 1 part is needed");
     Json no_map = two_parts();
     no_map["parts"]["list"][1]["tactile"]["images"] = Json::array();
     expect(no_map, "parts.list[1]: 'tactile.images' is empty");

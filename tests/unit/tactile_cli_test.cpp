@@ -1,10 +1,12 @@
 // End-to-end runs of the `tdf tactile` steps through the built binary.
 #include <gtest/gtest.h>
 #include <fmt/format.h>
+#include <tdf/core/config.h>
 #include <tdf/io/image_io.h>
 #include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/tactile_map.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +15,7 @@
 #include <memory>
 
 #include "common/test_paths.h"
+#include "unit/gelsight_plate.h"
 #include "unit/tactile_unseen_inputs.h"
 
 using namespace tdf;
@@ -165,12 +168,41 @@ TEST(TactileCli, ReportComparesWithTheInputsOwnTiltAndWarnsOnce) {
     EXPECT_EQ(count(run.output, "of the input region's"), 0u) << run.output;
     std::ifstream json(dir + "/8_statistics.json");
     const std::string statistics((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
-    for (const char* key : {"\"region_mean_tilt\"", "\"out_mean_tilt\"", "\"tilt_ratio\"", "\"strength\": 1,",
-                            "\"input_slopes_known\": true"})
-        EXPECT_NE(statistics.find(key), std::string::npos) << key << " in " << statistics;
+    const Json parsed = Json::parse(statistics);  // one object: one input
+    for (const char* key : {"region_mean_tilt", "out_mean_tilt", "tilt_ratio"})
+        EXPECT_TRUE(parsed.contains(key) && parsed[key].is_number()) << key << " in " << statistics;
+    EXPECT_EQ(parsed.value("strength", 0.0), 1.0) << statistics;
+    EXPECT_EQ(parsed.value("input_slopes_known", false), true) << statistics;
 
     run = run_tdf(convert + " --strength 4");
     ASSERT_EQ(run.status, 0) << run.output;
     EXPECT_EQ(count(run.output, "steeper than the input: detail tilt"), 1u) << run.output;
     EXPECT_EQ(count(run.output, "of the input region's"), 1u) << "one warning line for the ratio: " << run.output;
+}
+
+// Issue 24: `tdf tactile simulate` writes what the sensor measures; bad input (a folder without
+// an asset, a point off the mesh, a pad larger than the part) is one line and exit 1, and
+// leaves no output folder behind.
+TEST(TactileCli, SimulateWritesTouchesAndRefusesBadInputInOneLine) {
+    TDF_REQUIRE_TDF_BINARY();
+    const std::string dir = test::scratch_dir() + "/cli_simulate";
+    test::write_plate(dir + "/plate", 20.0f, 0.05, 2.0);
+    const std::string out = dir + "/touches";
+    std::filesystem::remove_all(out);
+    CliRun run = run_tdf("tactile simulate " + dir + "/plate --points 2 --pad-pixels 60 -o " + out);
+    ASSERT_EQ(run.status, 0) << run.output;
+    for (const char* file : {"touch_000_height.exr", "touch_000_height.png", "touch_000_normal.png",
+                             "touch_001_gelsight.png", "simulate.json"})
+        EXPECT_TRUE(std::filesystem::exists(out + "/" + file)) << file << ": " << run.output;
+
+    std::filesystem::create_directories(dir + "/empty");
+    const std::string bad_out = dir + "/bad_touches";
+    std::filesystem::remove_all(bad_out);
+    for (const std::string& arguments :
+         {dir + "/empty --at 0.5,0.5", dir + "/plate --at 1.5,0.5", dir + "/plate --at 0.5,0.5 --pad-pixels 300"}) {
+        run = run_tdf("tactile simulate " + arguments + " -o " + bad_out);
+        EXPECT_EQ(run.status, 1) << arguments << ": " << run.output;
+        EXPECT_EQ(std::count(run.output.begin(), run.output.end(), '\n'), 1) << arguments << ": " << run.output;
+        EXPECT_FALSE(std::filesystem::exists(bad_out)) << arguments;
+    }
 }

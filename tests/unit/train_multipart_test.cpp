@@ -13,6 +13,7 @@
 
 #include "common/four_part_sphere.h"
 #include "common/spot_truth.h"
+#include "common/part_training.h"
 #include "common/test_paths.h"
 
 #include <gtest/gtest.h>
@@ -27,16 +28,6 @@ using namespace tdf;
 namespace {
 
 const std::string kFolder = test::source_dir() + "/scenes/two_part_sphere/";
-
-RunConfig small_config(int iterations, int init_iterations, const std::string& evaluation = "texture") {
-    const Json optimize = {{"iterations", iterations},   {"init_iterations", init_iterations},
-                           {"resolution", 128},          {"patch_resolution", 64},
-                           {"batch_size", 2},            {"patch_batch_size", 2},
-                           {"patch_half_extent", 0.3},   {"held_out_views", 2},
-                           {"held_out_patches", 2}};
-    return RunConfig::from_json(optimize, Json(), Json({{"texture_size", 256}}), Json(), "test",
-                                Json({{"evaluation", evaluation}}));
-}
 
 // A tactile guidance backend for the gating test: wherever its mask is positive it asks for one
 // strongly tilted view-space normal, a "material" no part has, so what it changed is easy to find.
@@ -85,18 +76,6 @@ double angle_degrees(const Image& a, const Image& b, std::size_t t) {
     return std::acos(std::clamp(double(dot(na, nb)), -1.0, 1.0)) * 180.0 / 3.14159265358979;
 }
 
-// What run_optimize gives the trainer for a multi-part scene.
-TrainingTarget part_target(const SceneAssets& assets, const PartTraining& parts) {
-    TrainingTarget target;
-    target.mesh = &assets.mesh;
-    target.scene = assets.scene.get();
-    target.material = &assets.material;
-    target.tactile_target_override = &parts.target;
-    target.texel_parts = &parts.segmentation.texel_part;
-    target.part_names = parts.segmentation.part_names;
-    return target;
-}
-
 }  // namespace
 
 TEST(TextureSpaceParts, FourPartsLabelsBoundariesAndGatedGuidance) {
@@ -105,11 +84,11 @@ TEST(TextureSpaceParts, FourPartsLabelsBoundariesAndGatedGuidance) {
     const SceneDescription description =
         test::four_part_sphere(two, assets->mesh, test::scratch_dir() + "/four_part_sphere_labels.txt");
     const int size = 256;
-    const RunConfig config = small_config(66, 60);  // tactile guidance at iterations 61-65
+    const RunConfig config = test::small_part_config(66, 60);  // tactile guidance at iterations 61-65
     const PartTraining parts =
         prepare_part_training(description, assets->mesh, assets->material, size, config.gutter, "four parts");
     const std::vector<int>& truth = parts.segmentation.texel_part;  // face_labels: the ground truth
-    const TrainingTarget target = part_target(*assets, parts);
+    const TrainingTarget target = test::part_target(*assets, parts);
     Trainer trainer(target, config, 3);
     trainer.set_guidance(nullptr, nullptr);
     while (trainer.iteration() < config.init_iterations) trainer.step();
@@ -219,10 +198,10 @@ TEST(TextureSpaceParts, FourPartsLabelsBoundariesAndGatedGuidance) {
 TEST(TextureSpaceParts, LabelsFidelityAndBoundaryOnTheTwoPartSphere) {
     const SceneDescription description = load_scene(kFolder + "scene.json");
     const auto assets = load_scene_assets(description);
-    const RunConfig config = small_config(60, 60);
+    const RunConfig config = test::small_part_config(60, 60);
     const PartTraining parts = prepare_part_training(description, assets->mesh, assets->material, 256,
                                                      config.gutter, "two_part_sphere: parts");
-    const TrainingTarget target = part_target(*assets, parts);
+    const TrainingTarget target = test::part_target(*assets, parts);
     Trainer trainer(target, config, 3);
     trainer.set_guidance(nullptr, nullptr);
     ASSERT_TRUE(trainer.trains_labels());
@@ -290,10 +269,10 @@ TEST(TextureSpaceParts, LabelHeadLearnsTheSpotPartsOnTheRealMesh) {
     const std::string scene = test::source_dir() + "/scenes/spot_parts/scene.json";
     const SceneDescription description = load_scene(scene);
     const auto assets = load_scene_assets(description);
-    const RunConfig config = small_config(60, 60);
+    const RunConfig config = test::small_part_config(60, 60);
     const PartTraining parts =
         prepare_part_training(description, assets->mesh, assets->material, 256, config.gutter, scene + ": parts");
-    const TrainingTarget target = part_target(*assets, parts);
+    const TrainingTarget target = test::part_target(*assets, parts);
     Trainer trainer(target, config, 3);
     trainer.set_guidance(nullptr, nullptr);
     while (trainer.iteration() < config.iterations) trainer.step();
@@ -318,10 +297,10 @@ TEST(TextureSpaceParts, LabelHeadLearnsTheSpotPartsOnTheRealMesh) {
 TEST(TextureSpaceParts, PixelEvaluationWithPartsIsRefusedInOneLine) {
     const SceneDescription description = load_scene(kFolder + "scene.json");
     const auto assets = load_scene_assets(description);
-    const RunConfig config = small_config(2, 1, "pixel");
+    const RunConfig config = test::small_part_config(2, 1, "pixel");
     const PartTraining parts = prepare_part_training(description, assets->mesh, assets->material, 256,
                                                      config.gutter, "two_part_sphere: parts");
-    const TrainingTarget target = part_target(*assets, parts);
+    const TrainingTarget target = test::part_target(*assets, parts);
     try {
         Trainer trainer(target, config, 3);
         FAIL() << "pixel evaluation with parts was accepted";

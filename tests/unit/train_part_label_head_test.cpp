@@ -131,6 +131,7 @@ TEST(PartLabelHead, SameGradientOnOneAndTwoThreads) {
     EXPECT_EQ(run(1), run(2));
 }
 
-TEST(PartLabelHead, FewerThanTwoPartsIsRefused) {
-    EXPECT_THROW(PartLabelHead(1, 32, 0), Error);
+TEST(PartLabelHead, NoPartIsRefused) {
+    EXPECT_THROW(PartLabelHead(0, 32, 0), Error);
+    EXPECT_NO_THROW(PartLabelHead(1, 32, 0));  // one part: the whole surface (its loss is 0)
 }

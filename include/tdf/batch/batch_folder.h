@@ -39,6 +39,9 @@ const char* job_end_name(JobEnd end);
 /// its --timeout.
 JobEnd classify_job_end(int exit_code, int signal, bool timed_out);
 
+/// The status an ended attempt leaves: done; failed (input or resource); interrupted (preempted).
+JobStatus status_after(JobEnd end);
+
 struct JobState {
     JobStatus status = JobStatus::Pending;
     JobEnd end = JobEnd::None;      ///< how the last attempt ended (key "class")
@@ -59,6 +62,13 @@ struct JobState {
     std::string thumbnail;     ///< a PNG the job produced (path relative to the batch folder), or ""
     Json quality =
         Json::object();  ///< the job's quality numbers (optimize: held-out report; compare: PSNR, ...)
+
+    /// Records how the attempt ended: `end` and the status it implies, always together (the state
+    /// file keeps both keys, "status" and "class", for its readers).
+    void end_attempt(JobEnd how) {
+        end = how;
+        status = status_after(how);
+    }
 
     Json to_json() const;
     static JobState from_json(const Json& json);

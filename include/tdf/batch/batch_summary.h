@@ -6,7 +6,7 @@
 
 namespace tdf {
 
-/// Exit codes of `tdf batch run` and `tdf batch status` (README "tdf batch").
+/// Exit codes of `tdf batch run` and `tdf batch status` (docs/commands/batch.md).
 constexpr int kBatchExitAllDone = 0;     ///< every job done
 constexpr int kBatchExitBadInput = 1;    ///< bad manifest/options, a changed manifest, sbatch refused
 constexpr int kBatchExitFailed = 2;      ///< at least one job failed

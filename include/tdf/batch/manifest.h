@@ -1,5 +1,5 @@
 #pragma once
-/// Batch manifests (README "tdf batch"): a list of jobs, each one `tdf` subcommand with its
+/// Batch manifests (docs/commands/batch.md): a list of jobs, each one `tdf` subcommand with its
 /// arguments, a job name and an output folder. Two spellings of the same content:
 ///
 /// JSON lines (`.jsonl`, or any file whose first non-blank character is `{`), one job a line:

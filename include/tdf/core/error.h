@@ -1,5 +1,5 @@
 #pragma once
-/// Two error channels (see README "Errors"):
+/// Two error channels (see docs/robustness.md "Errors"):
 ///  - bad input (files, options, data) throws tdf::Error with one line naming what and where;
 ///    `tdf` catches it once in main, prints "tdf <command>: <message>" and exits non-zero;
 ///  - a broken internal invariant fails a TDF_CHECK, which prints both values and aborts.

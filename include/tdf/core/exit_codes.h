@@ -1,5 +1,5 @@
 #pragma once
-/// Exit codes of `tdf` (README "Errors"). `tdf batch` classifies a job's end by them
+/// Exit codes of `tdf` (docs/robustness.md "Errors"). `tdf batch` classifies a job's end by them
 /// (docs/commands/batch.md "Failure classes"). kExitInterrupted (75) is in train/run_guard.h.
 
 namespace tdf {

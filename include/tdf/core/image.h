@@ -1,6 +1,6 @@
 #pragma once
 /// A float image: `width` x `height` pixels of `channels` interleaved floats, row-major,
-/// row 0 = top of the picture (README "Conventions"). Values are linear, unclamped.
+/// row 0 = top of the picture (docs/conventions.md). Values are linear, unclamped.
 #include <cstddef>
 #include <string>
 #include <vector>

@@ -1,6 +1,6 @@
 #pragma once
 /// Small fixed-size vector types for hot loops (Eigen is used for solvers, not per pixel).
-/// Conventions: world is right-handed, Y up, the object's front faces +Z (README "Conventions").
+/// Conventions: world is right-handed, Y up, the object's front faces +Z (docs/conventions.md).
 #include <algorithm>
 #include <cmath>
 

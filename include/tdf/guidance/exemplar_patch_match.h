@@ -48,7 +48,7 @@
 /// The search is approximate (PatchMatch); content that exists in an exemplar variant is found
 /// exactly (tested with 90-degree rotated crops). Cost grows with the working image's pixels, not
 /// with the exemplar's size, except for turning the (scaled) exemplar for each image and sorting
-/// its tilts, which are linear in the exemplar's pixels (README "Guidance backends" gives the
+/// its tilts, which are linear in the exemplar's pixels (docs/guidance-backends.md gives the
 /// measured times). Memory: the search variants' pyramids, about 16 bytes x scaled exemplar
 /// pixels x variants (surface variants: per image being refined).
 #include <tdf/guidance/guidance_backend.h>
@@ -83,7 +83,7 @@ public:
         int levels = 2;
         /// "em_iterations": search + vote rounds per level. More rounds re-synthesise more of the
         /// image, which moves the target away from where the learned relief is: inside the
-        /// optimizer one round pulls the statistics toward the exemplar best (README).
+        /// optimizer one round pulls the statistics toward the exemplar best (docs/guidance-backends.md).
         int em_iterations = 1;
         /// "search_iterations": PatchMatch propagation + random-search rounds per search.
         int search_iterations = 8;

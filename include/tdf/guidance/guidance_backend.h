@@ -146,8 +146,7 @@ public:
     /// Creates a backend by name from its JSON config object (unknown keys are an error):
     /// "none" -> nullptr (guidance disabled), "exemplar_patch_match", "relief_shading",
     /// "external". Throws tdf::Error naming the backend for unknown names or bad configs.
-    /// Config keys of each backend are documented in its header and in README "Guidance
-    /// backends".
+    /// Config keys of each backend are documented in its header and in docs/guidance-backends.md.
     static std::unique_ptr<GuidanceBackend> create(const std::string& name, const Json& config);
     /// The names create() accepts, "none" first.
     static std::vector<std::string> names();

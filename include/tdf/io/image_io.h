@@ -35,7 +35,7 @@ Image decode_image(const std::string& bytes, const std::string& where);
 enum class Quantize { Truncate, Round };
 
 /// Key-value text stored with an image: PNG tEXt chunks (keys of 1-79 Latin-1 characters) or
-/// EXR string attributes. tdf uses keys such as "tdf:mm_per_pixel" (README "Conventions").
+/// EXR string attributes. tdf uses keys such as "tdf:mm_per_pixel" (docs/conventions.md).
 using ImageMetadata = std::map<std::string, std::string>;
 
 /// read_image that also returns the file's text metadata (PNG tEXt/zTXt/iTXt chunks, EXR

@@ -1,5 +1,5 @@
 #pragma once
-/// Multi-part segmentation (README "Multi-part textures"): which part of a multi-part scene each
+/// Multi-part segmentation (docs/multi-part-textures.md): which part of a multi-part scene each
 /// face and each atlas texel belongs to, from one of the `parts.source` kinds:
 ///
 /// - `mesh`: the input's structure (TriangleMesh::face_groups), keyed by `material`, `object`,

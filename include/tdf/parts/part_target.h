@@ -55,7 +55,7 @@ constexpr float kDefaultPartBand = 1.5f;
 /// its grown part's layer unblended, so lookups near chart borders stay in their part; texels
 /// left without a part are flat (0,0,1). Blending against labels already grown into the gutter
 /// would let another chart's gutter pull a part's texels into the band: that made the 2.83-texel
-/// bleed measured with 4 parts (README "Multi-part textures").
+/// bleed measured with 4 parts (docs/multi-part-textures.md).
 Image compose_part_target(const std::vector<int>& labels, int size, const std::vector<Image>& layers,
                           float band = kDefaultPartBand, int gutter = 0);
 
@@ -76,11 +76,13 @@ std::vector<int> dilate_labels(const std::vector<int>& labels, int size, int tex
 /// 1-channel mask, 1 where labels == part.
 Image part_mask(const std::vector<int>& labels, int size, int part);
 
-/// How compose_part_target handles the boundaries (README "Multi-part textures").
+/// How compose_part_target handles the boundaries (docs/multi-part-textures.md).
 struct PartBoundaryMeasure {
     /// Bleeding: the largest distance (texels, centre to centre) from the other part at which a
     /// texel's normal differs from its own part's layer by more than `tolerance_degrees`.
     double bleed_texels = 0;
+    /// The same per part (over the texels of that part): which material strays, for the report.
+    std::vector<double> part_bleed_texels;
     /// Mean angle (degrees) between 4-neighbour texels of different parts in the composite, and
     /// what a hard cut shows there (own layer against the neighbour's layer).
     double boundary_step_degrees = 0;

@@ -20,7 +20,7 @@
 /// Not bit-identical to a GPU: a GPU snaps vertices to a sub-pixel grid before the coverage test,
 /// so centres very close to an edge may go the other way, and it computes barycentrics in its own
 /// float order (against Mesa's llvmpipe: the same triangle on 99.92 % of the pixels, barycentric
-/// differences of median 3e-6; README "tdf render").
+/// differences of median 3e-6; docs/commands/render.md).
 ///
 /// Parallel: triangles are set up in fixed chunks, binned to 64x64-pixel tiles in chunk order,
 /// and each tile rasterized by one thread in triangle order, so the result is bit-identical on

@@ -33,6 +33,9 @@ public:
     /// downsample_box(level k): max(1, floor(size_k / 2)) per axis, each texel the area-weighted
     /// box average of the level-k texels it covers (the 2x2 box filter of spec 3.7 for even sizes).
     explicit MipTexture(const Image& image);
+    /// The same, taking the image as level 0 (no copy: a caller that keeps only the texture holds
+    /// its base image once).
+    explicit MipTexture(Image&& image);
 
     /// Rebuilds the pyramid from `image`, reusing the storage when the size and channel count are
     /// unchanged (an optimizer updates its maps every iteration without allocating).
@@ -44,6 +47,11 @@ public:
     int height() const { return m_levels.empty() ? 0 : m_levels[0].height(); }
     int level_count() const { return int(m_levels.size()); }
     const Image& level(int k) const { return m_levels[std::size_t(k)]; }
+    /// Level 0 to change in place (a learned map composed into the texture itself); call
+    /// rebuild_levels() before the next lookup.
+    Image& base_level() { return m_levels[0]; }
+    /// Levels 1.. from level 0 again, as the constructor and assign() build them.
+    void rebuild_levels();
 
     /// Bilinear lookup on level 0; writes channels() floats to `out`.
     void sample_bilinear(Vec2f uv, float* out) const;
@@ -55,6 +63,11 @@ public:
     void sample_trilinear(Vec2f uv, Vec2f duv_dx, Vec2f duv_dy, float* out, int max_level = -1) const;
     /// The same with the LOD given (from level_of_detail() of a texture of the same size).
     void sample_trilinear_at(Vec2f uv, float lod, float* out, int max_level = -1) const;
+    /// sample_trilinear_at of this texture into `out` and of `other` into `other_out` at the same
+    /// uv, LOD and max_level, bit for bit; `other` must have this texture's width and height (an
+    /// albedo and a tactile map laid alike), so both share one footprint per level.
+    void sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, float lod, float* out, float* other_out,
+                                  int max_level = -1) const;
     /// The texels and weights sample_trilinear_at(uv, lod, out, max_level) blends (same LOD
     /// clamping, same wrap addressing), for optimizers that need the adjoint (texture_gradient.h).
     /// Weights sum to 1.

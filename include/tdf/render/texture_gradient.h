@@ -14,6 +14,7 @@
 /// with disjoint writes. Results are identical on any thread count.
 #include <tdf/render/texture.h>
 
+#include <cstdint>
 #include <vector>
 
 namespace tdf {
@@ -28,6 +29,16 @@ public:
     void reset(const MipTexture& texture, int channels = 0);
     /// Adds weight_k x grad to each tap (grad has channels() floats).
     void add(const TrilinearTaps& taps, const float* grad);
+    /// Texel ranges splitting every level into `count` bands (for add_band).
+    struct Bands {
+        int count = 1;
+        std::vector<std::uint32_t> edges;  ///< level l, band b: [edges[l (count+1) + b], ... + b + 1)
+    };
+    Bands bands(int count) const;
+    /// add() restricted to the taps whose texel lies in band `band`. Tasks that each take one band
+    /// and run over the same taps in the same order add into disjoint texels, and every texel gets
+    /// its sums in that order: the same bits as add() on one thread, with the work spread.
+    void add_band(const TrilinearTaps& taps, const float* grad, const Bands& bands, int band);
     /// Adds every other's gradient into this one (same shape); used to reduce per-task gradients
     /// in a fixed order.
     void accumulate(const MipGradient& other);

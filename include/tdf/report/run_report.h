@@ -39,6 +39,14 @@ struct RunReport {
     /// with their aims) and its spot strips (input | after matching | final), shown full size.
     Json colour = Json::object();
     std::vector<ReportImage> albedo_spots;
+    /// Multi-part runs: `_report.json`'s "parts" array (docs/multi-part-textures.md), one row per
+    /// part with its mask and material swatch (`mask`, `swatch`: files beside the page).
+    Json parts = Json::array();
+    /// Issue 24: `_report.json`'s "height_map" (the relief's scale) and "tactile_roundtrip" (a
+    /// virtual GelSight against the input capture), and the touch previews: the capture's and the
+    /// simulated touches' (side by side).
+    Json height_map = Json::object(), tactile_roundtrip = Json::object();
+    std::vector<ReportImage> touches;
     std::string loss_plot_svg;               ///< an SVG file inlined in the page; empty: none
     Json losses = Json::array();             ///< the `_losses.jsonl` objects, in order
     int init_iterations = 0;                 ///< end of the matching phase (a column of the loss table)

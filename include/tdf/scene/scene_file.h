@@ -1,6 +1,6 @@
 #pragma once
 /// Scene files: JSON describing a mesh, its materials, views, light and output passes, read by
-/// `tdf render` and shared with the optimizer (README "Scene file format" lists every key).
+/// `tdf render` and shared with the optimizer (docs/scene-format.md lists every key).
 ///
 /// - Unknown keys are errors. The top-level sections "optimize", "tactile_layout", "guidance"
 ///   and "export" belong to other modules: they are kept as raw JSON in `sections` for their
@@ -61,7 +61,7 @@ struct LightSpec {
     float ambient = 0.1f;  ///< default by shading mode: training 0.5 (spec 3.4), visualizer 0.1 (3.9)
 };
 
-/// How one part's tactile map is laid on the atlas (README "Multi-part textures").
+/// How one part's tactile map is laid on the atlas (docs/multi-part-textures.md).
 struct PartLayoutSpec {
     std::string mode = "atlas";  ///< "atlas": covers the atlas `repeat` times; "physical": real size
     float repeat = 1.f;          ///< atlas mode: uv' = uv * repeat, > 0

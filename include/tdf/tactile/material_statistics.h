@@ -2,12 +2,13 @@
 /// Does a tactile normal map keep the material it came from? Statistics of the *detail* of a
 /// normal map (its slopes after a high-pass, so the curvature of a pressed object does not
 /// count), the textured region of a sample, and a texture-similarity distance. `tdf tactile
-/// convert` reports them for its input region and its output (README "tdf tactile").
+/// convert` reports them for its input region and its output (docs/commands/tactile.md).
 ///
 /// The measure is the one of the project's yardstick script (check_tactile_material.py), so
 /// both give the same numbers: slopes sx = nx / nz, sy = ny / nz (nz clamped to at least 1e-3)
 /// minus their Gaussian low-pass (sigma 12 px, mirrored reflect-101 borders, taps out to
 /// int(3 sigma + 1)); detail tilt = atan(|(sx, sy)|) in degrees.
+#include <tdf/core/config.h>
 #include <tdf/core/image.h>
 
 #include <string>
@@ -78,10 +79,15 @@ struct MaterialComparison {
     /// The whole input against its own region: what an output that copies the input's whole
     /// layout (flat gel, or smooth parts of the material the region leaves out) would measure.
     double input_mean_tilt = 0, input_flat = 0, input_tilt_ratio = 0;
-    /// One line of JSON with the numbers (keys as the yardstick's, plus the distance and its terms
-    /// and the whole input's numbers).
+    /// The numbers as JSON (keys as the yardstick's, plus the distance and its terms and the whole
+    /// input's numbers), rounded to 4 decimals (the L1 terms to 3).
+    Json to_json() const;
+    /// to_json() on one line.
     std::string json() const;
 };
+
+/// `value` rounded to `digits` significant digits (what a report states of a measured number).
+double rounded_significant(double value, int digits);
 
 /// Compares `output` normals with the textured region of `input` normals (both decoded, 3+
 /// channels). `region` (1 channel, the input's size) selects the input texels; empty = found

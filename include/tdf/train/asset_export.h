@@ -4,9 +4,11 @@
 /// the maps as 8-bit PNG (the reference's truncating encoding) and float EXR, and turntable
 /// renders of the result.
 #include <tdf/field/texture_field.h>
+#include <tdf/mesh/mesh_writer.h>
 #include <tdf/mesh/triangle_mesh.h>
 #include <tdf/render/renderer.h>
 #include <tdf/scene/embree_scene.h>
+#include <tdf/tactile/height_export.h>
 #include <tdf/train/run_config.h>
 #include <tdf/train/texture_bake.h>
 
@@ -28,14 +30,18 @@ BakedMaps export_asset(const std::string& folder, const std::string& name, const
 /// _albedo.exr,_tactile_normal.exr}` (GLB and EXRs as `config` says). Every file is written
 /// atomically; the GLB embeds the very bytes of the two PNG files. `mesh` is written as given:
 /// pass it in the input's own coordinates (SceneAssets::export_mesh), with the UVs the maps were
-/// made for.
-void write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
-                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config);
+/// made for. A multi-part run passes `parts`: one material per part in the MTL and the GLB (one
+/// primitive per part), all on the same two maps (write_obj, write_glb).
+///
+/// With `height_scale` (mm_per_texel > 0) also the relief the exported normal map stands for
+/// (issue 24): `_height.exr` (mm) and `_height.png` (16-bit), integrated from the normals as
+/// the PNG decodes them and checked against them over the atlas's covered texels; the MTL
+/// names it as `disp -mm base gain` (mesh units) and the GLB embeds it under the material's
+/// `extras.tdf_height`. Returns the scale as exported_height_json (null without a height).
+Json write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
+                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config,
+                 const FaceMaterials& parts = {}, const ExportScale* height_scale = nullptr);
 
-/// Writes maps that are already baked (the texture-space optimizer's learned maps) with the same
-/// files as export_asset.
-void write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
-                 const BakedMaps& maps, const TriangleMesh& mesh, const RunConfig& config);
 
 /// Renders `views` azimuths of the exported asset (baked maps, visualizer shading, light from the
 /// camera) and writes `<folder>/turntable/<pass>_<k>.png` for albedo, lambertian,

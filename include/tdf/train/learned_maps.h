@@ -75,10 +75,9 @@ private:
     std::vector<float> m_residual;
     std::vector<FieldOutputs> m_field_outputs;
     FieldCache m_cache;
-    Image m_albedo_level0, m_normal_level0;
     Image m_albedo_low, m_albedo_high;  ///< empty: no bound
     Image m_step_scratch;  ///< jacobi_step's smoothing buffer (kept: no allocation per iteration)
-    MipTexture m_albedo, m_normal;
+    MipTexture m_albedo, m_normal;  ///< level 0 is the composed map (update())
 };
 
 }  // namespace tdf

@@ -1,6 +1,6 @@
 #pragma once
 /// `tdf optimize` as a library call: load the scene, train, checkpoint, export. Everything a
-/// run writes goes under `output_dir` (README "tdf optimize" lists the files).
+/// run writes goes under `output_dir` (docs/asset-formats.md lists the files).
 #include <tdf/core/image.h>
 #include <tdf/mesh/triangle_mesh.h>
 #include <tdf/parts/part_segmentation.h>
@@ -30,7 +30,7 @@ struct OptimizeOptions {
 /// name (the reference, spec 1.1); else "object".
 std::string object_name_for_prompt(const SceneDescription& description, const TriangleMesh& mesh);
 
-/// What a multi-part scene gives the trainer (README "Multi-part textures"): the segmentation
+/// What a multi-part scene gives the trainer (docs/multi-part-textures.md): the segmentation
 /// at the map size, each part's tactile map laid over the whole atlas with its layout, and the
 /// composed target (TrainingTarget), grown `gutter` texels into the empty atlas.
 struct PartTraining {

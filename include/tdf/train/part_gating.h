@@ -1,7 +1,7 @@
 #pragma once
-/// Part masks gating the tactile terms of a multi-part run (spec 7.3, 5.3, 5.5; README
-/// "Multi-part textures"): every patch pixel belongs to the part the label head predicts at the
-/// atlas texel its lookup lands on; part k's tactile matching and tactile guidance terms see only
+/// Part masks gating the tactile terms of a multi-part run (spec 7.3, 5.3, 5.5;
+/// docs/multi-part-textures.md): every patch pixel belongs to the part the label head predicts at
+/// the atlas texel its lookup lands on; part k's tactile matching and tactile guidance terms see only
 /// its own pixels (the reference's M_k n_hat, M_k target), with part k's own weights, prompt and
 /// guidance backend (whose exemplars are part k's tactile maps). One normal map holds all parts.
 ///

@@ -1,7 +1,7 @@
 #pragma once
 /// Settings of `tdf optimize`, read from the scene file's "optimize", "tactile_layout" and
 /// "export" sections. Every default is the reference's value (spec 2.3, 2.4, 4.4, 5.1-5.5)
-/// unless its comment says otherwise; README "Scene file format" lists them all.
+/// unless its comment says otherwise; docs/scene-format.md lists them all.
 #include <tdf/core/config.h>
 
 #include <cstdint>

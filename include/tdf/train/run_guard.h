@@ -1,9 +1,10 @@
 #pragma once
 /// What keeps a run's output folder consistent under schedulers, retries and concurrency
-/// (README "Runs that survive"): a refusal of dangerous output names, an exclusive lock of the
-/// output folder, stop signals that end a run at the next iteration boundary with a checkpoint,
-/// content hashes of every input (so a resume with changed inputs is refused), the removal of
-/// temporaries a killed run left behind, and a completion record written last.
+/// (docs/commands/optimize.md "Runs that survive"): a refusal of dangerous output names, an
+/// exclusive lock of the output folder, stop signals that end a run at the next iteration
+/// boundary with a checkpoint, content hashes of every input (so a resume with changed inputs is
+/// refused), the removal of temporaries a killed run left behind, and a completion record
+/// written last.
 #include <tdf/core/config.h>
 #include <tdf/core/error.h>
 

@@ -46,7 +46,7 @@ struct TrainingTarget {
     const EmbreeScene* scene = nullptr;     ///< built from `mesh`
     const SurfaceMaterial* material = nullptr;  ///< base albedo source + tactile map (decoded)
     std::string prompt;                     ///< visual guidance text (spec 5.7)
-    /// Multi-part scenes (README "Multi-part textures"; texture evaluation only, the trainer
+    /// Multi-part scenes (docs/multi-part-textures.md; texture evaluation only, the trainer
     /// refuses pixel evaluation with parts). All three are set together or not at all.
     /// The composed tactile target over the atlas (texture_size x texture_size, 3 channels, unit
     /// normals in [-1, 1], compose_part_target): used instead of tactile_target(); one normal
@@ -66,7 +66,7 @@ struct TrainingTarget {
 /// 0 without a tactile map or UVs. Tactile guidance requests carry it (GuidanceRequest).
 float patch_pixels_per_texel(const TrainingTarget& target, const RunConfig& config);
 
-/// Held-out quality after training (README "Measured").
+/// Held-out quality after training (docs/measurements.md).
 struct QualityReport {
     double albedo_psnr_foreground = 0;  ///< dB over covered pixels of the held-out views
     double albedo_psnr_full = 0;        ///< dB over whole images, white background included
@@ -121,7 +121,7 @@ struct LearnedImages {
     Image mask;
 };
 
-/// Per-stage seconds of the iterations so far (README "Measured").
+/// Per-stage seconds of the iterations so far (docs/measurements.md).
 struct StageTimes {
     double tracing = 0, field_forward = 0, losses = 0, guidance = 0, field_backward = 0, adam = 0;
     double matching = 0;  ///< texture evaluation: dense fit iterations (no rendering)
@@ -184,8 +184,8 @@ public:
     BakedMaps export_maps() const;
     /// The texture-space table and targets (texture evaluation only; nullptr otherwise).
     const TexelAtlas* texel_atlas() const { return m_atlas.get(); }
-    const Image& albedo_target() const { return m_albedo_target; }
-    const Image& tactile_target() const { return m_tactile_target; }
+    const Image& albedo_target() const { return m_albedo_target_texture.level(0); }
+    const Image& tactile_target() const { return m_tactile_target_texture.level(0); }
     /// How far `albedo` (size x size RGB, e.g. export_maps().albedo) leaves the input albedo's
     /// local range (albedo_range.h, radius kRangeMeasureRadius, limit kRangeMeasureLimit), over
     /// the covered texels (texture evaluation only).
@@ -216,17 +216,26 @@ public:
 private:
     struct Batch;  // per-iteration buffers, allocated once (trainer.cpp)
     struct Phase;  // what iteration i computes (spec 5.1)
+    struct GuidanceImages;  // visual guidance inputs per view (trainer_impl.h)
 
-    // The stages of one iteration, in order.
+    // The stages of one iteration, in order (each file's header says what it reads and writes).
+    // trainer_matching.cpp
     LossRecord fit_maps(int i);  // texture evaluation, matching phase: dense fit, no rendering
+    // trainer_views.cpp
     void sample_cameras(Rng& rng);
     /// Trace, surface, loss terms (and, texture evaluation, the scatter into the map gradients)
     /// for the cameras [first, last): patches come first, then visual views.
     void run_views(const Phase& phase, std::size_t first, std::size_t last, LossRecord& record);
     void trace_views(std::size_t first, std::size_t last);
     void evaluate_surface(bool with_view_normals);
+    // trainer_tactile_terms.cpp
     void tactile_terms(const Phase& phase, LossRecord& record);
+    // trainer_visual_terms.cpp: the views' renders, the albedo term, visual guidance, backward.
     void visual_terms(const Phase& phase, LossRecord& record);
+    void render_visual_views(bool visual_guidance, GuidanceImages& guidance_images);
+    void visual_guidance_terms(const Phase& phase, GuidanceImages guidance_images, LossRecord& record);
+    void visual_terms_backward(const Phase& phase);
+    // trainer_refinement.cpp
     void begin_map_gradients();
     void scatter_map_gradients();
     /// Lets the visual views reuse the patches' G-buffers and back (texture evaluation).
@@ -243,8 +252,8 @@ private:
     void evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs) const;
     /// Traces `camera` into `g` and evaluates the surface at its hits, in pixel order.
     void trace_and_evaluate(const Camera& camera, GBuffer& g, std::vector<FieldOutputs>& outputs) const;
-    /// Texture evaluation: the tactile target over the atlas at hit q's lookup, renormalised.
-    Vec3f lookup_target_normal(std::size_t q) const;
+    /// evaluate_held_out's patch measures (tactile cosine, tilt distances, patch count).
+    void measure_held_out_patches(QualityReport& report) const;
     /// Multi-part: the matching phase's label cross-entropy on the fit texels (gradient into the
     /// grid's part of m_gradient and the head's own), its Adam step; the gated tactile terms.
     double fit_labels(std::size_t n);
@@ -260,11 +269,12 @@ private:
     // Texture evaluation.
     std::unique_ptr<TexelAtlas> m_atlas;
     std::unique_ptr<LearnedMaps> m_maps;
-    Image m_albedo_target, m_tactile_target;
     std::vector<int> m_texel_charts;  ///< per texel its UV chart, -1 in the gutter (albedo_range.h)
     SeamBlendStats m_seam_blend;
-    MipTexture m_albedo_target_texture;   // the input albedo over the atlas, as renders sample it
-    MipTexture m_tactile_target_texture;  // the tactile target over the atlas, likewise
+    // The input albedo and the tactile target over the atlas, as renders sample them; their level
+    // 0 is the per-texel target of the matching phase (held once: albedo_target(), tactile_target()).
+    MipTexture m_albedo_target_texture;
+    MipTexture m_tactile_target_texture;
     std::unique_ptr<Adam> m_residual_adam;
     std::vector<float> m_residual_gradient;
     bool m_maps_ready = false;

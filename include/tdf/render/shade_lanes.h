@@ -1,0 +1,43 @@
+#pragma once
+// The per-pixel arithmetic of the renderer's shading (shading normal, view-space normal, diffuse
+// shade) over one tile at a time, in structure-of-arrays form so that the compiler vectorises it
+// (16 lanes with AVX-512, 8 with AVX2, chosen at load time). Each lane computes exactly what the
+// scalar functions of shading.h compute, in the same order, so every result is bit-identical.
+#include <tdf/core/vec.h>
+#include <tdf/render/shading.h>
+#include <tdf/render/trace.h>
+
+namespace tdf {
+
+// One tile's lanes: inputs from the G-buffer and the texture lookups, outputs for the passes.
+struct ShadeLanes {
+    static constexpr int kMax = kTraceTile * kTraceTile;
+    int count = 0;
+    // Inputs: interpolated normal N and tangent T, handedness w, world position, the sampled
+    // tangent-space tactile normal p (not normalised).
+    alignas(64) float nx[kMax], ny[kMax], nz[kMax];
+    alignas(64) float tx[kMax], ty[kMax], tz[kMax], w[kMax];
+    alignas(64) float qx[kMax], qy[kMax], qz[kMax];
+    alignas(64) float px[kMax], py[kMax], pz[kMax];
+    // Outputs: the tactile normal as drawn (normalised in training), the shading normal, the
+    // view-space normal and the diffuse shade.
+    alignas(64) float tnx[kMax], tny[kMax], tnz[kMax];
+    alignas(64) float snx[kMax], sny[kMax], snz[kMax];
+    alignas(64) float vx[kMax], vy[kMax], vz[kMax];
+    alignas(64) float shade[kMax];
+    Vec3f albedo[kMax];  ///< not read by shade_lanes: the caller's albedo of each lane
+};
+
+// What is constant over a frame.
+struct ShadeConstants {
+    bool training = true;        ///< renormalise p and the view-space normal (spec 3.1, 3.5)
+    ViewRotation view;           ///< the camera's axes
+    bool point_light = true;     ///< light_vector is a position (else a direction toward the light)
+    Vec3f light_vector;
+    float ambient = 0.5f;
+};
+
+// Computes the outputs of lanes [0, count).
+void shade_lanes(ShadeLanes& lanes, const ShadeConstants& c);
+
+}  // namespace tdf

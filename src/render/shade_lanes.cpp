@@ -1,0 +1,49 @@
+#include <tdf/render/shade_lanes.h>
+
+#include <tdf/core/force_inline.h>
+
+namespace tdf {
+
+namespace {
+
+// One lane: the scalar functions of shading.h, inlined, so the loop below vectorises.
+template <bool Training, bool PointLight>
+TDF_FORCE_INLINE void shade_lane(ShadeLanes& l, const ShadeConstants& c, int i) {
+    Vec3f p{l.px[i], l.py[i], l.pz[i]};
+    if (Training) p = safe_normalize(p);  // spec 3.1 step 5
+    const Vec3f raw = shading_normal_unnormalized({l.tx[i], l.ty[i], l.tz[i]}, {l.nx[i], l.ny[i], l.nz[i]}, l.w[i], p);
+    const Vec3f n = safe_normalize(raw);
+    const Vec3f v = Training ? view_space_normal(c.view, n)
+                             : Vec3f{dot(c.view.right, raw), dot(c.view.up, raw), dot(c.view.back, raw)};
+    const Vec3f to_light = PointLight ? safe_normalize(c.light_vector - Vec3f{l.qx[i], l.qy[i], l.qz[i]})
+                                      : c.light_vector;
+    l.tnx[i] = p.x, l.tny[i] = p.y, l.tnz[i] = p.z;
+    l.snx[i] = n.x, l.sny[i] = n.y, l.snz[i] = n.z;
+    l.vx[i] = v.x, l.vy[i] = v.y, l.vz[i] = v.z;
+    l.shade[i] = visualizer_shade(n, to_light, c.ambient);
+}
+
+template <bool Training, bool PointLight>
+TDF_FORCE_INLINE void shade_all(ShadeLanes& l, const ShadeConstants& c) {
+    for (int i = 0; i < l.count; ++i) shade_lane<Training, PointLight>(l, c, i);
+}
+
+}  // namespace
+
+// Compiled for AVX-512, AVX2 and the x86-64 baseline, picked at load time (GCC target_clones).
+// All clones give the same bits: the lanes only add, multiply, divide, take square roots and
+// compare (exact in IEEE arithmetic at any vector width), and this file is built with
+// -ffp-contract=off (src/CMakeLists.txt): GCC otherwise fuses a*b+c into an FMA in the AVX-512
+// clone, which rounds once instead of twice. It is also built without errno for sqrt, so that
+// sqrt vectorises.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
+void shade_lanes(ShadeLanes& lanes, const ShadeConstants& c) {
+    if (c.training)
+        c.point_light ? shade_all<true, true>(lanes, c) : shade_all<true, false>(lanes, c);
+    else
+        c.point_light ? shade_all<false, true>(lanes, c) : shade_all<false, false>(lanes, c);
+}
+
+}  // namespace tdf

@@ -1,0 +1,159 @@
+#include <tdf/tactile/height_export.h>
+
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+#include <tdf/io/image_io.h>
+#include <tdf/tactile/normal_map.h>
+#include <tdf/tactile/pipeline.h>
+
+#include "fftw_plan_impl.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tdf {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Index of the source texel for texel `i` of a line mirrored to twice its length `n`, and
+/// the sign an odd (derivative) quantity takes there.
+inline int mirrored(int i, int n, float& sign) {
+    if (i < n) return i;
+    sign = -sign;
+    return 2 * n - 1 - i;
+}
+
+}  // namespace
+
+Image integrate_normal_map(const Image& normals, bool periodic, const std::string& what) {
+    TDF_CHECK(normals.channels() >= 3);
+    const int w = normals.width(), h = normals.height();
+    if (w < 3 || h < 3) throw_error("{}: a {}x{} map is too small to integrate (at least 3x3)", what, w, h);
+    if (!normals.all_finite()) throw_error("{}: the normal map contains NaN or infinity", what);
+    // Target differences: normals_from_height gives n ~ (-(h[x+1] - h[x-1]) / 2, (h[y+1] - h[y-1]) / 2, 1)
+    // with y the row index, so Dx h = -nx / nz and Dy h = ny / nz (central differences).
+    const int W = periodic ? w : 2 * w, H = periodic ? h : 2 * h;
+    const std::size_t n = std::size_t(W) * std::size_t(H), nc = std::size_t(H) * std::size_t(W / 2 + 1);
+    fftw::RealBuffer dx = fftw::alloc_real(n), dy = fftw::alloc_real(n);
+    parallel_for(std::size_t(H), 16, [&](std::size_t y0, std::size_t y1) {
+        for (int Y = int(y0); Y < int(y1); ++Y)
+            for (int X = 0; X < W; ++X) {
+                float sx = 1.0f, sy = 1.0f;  // odd in their own direction, even across it
+                const int x = mirrored(X, w, sx), y = mirrored(Y, h, sy);
+                const float* p = normals.pixel(x, y);
+                const float nz = std::max(p[2], 0.1f);
+                const std::size_t i = std::size_t(Y) * std::size_t(W) + std::size_t(X);
+                dx[i] = double(sx) * double(-p[0] / nz);
+                dy[i] = double(sy) * double(p[1] / nz);
+            }
+    });
+    fftw::ComplexBuffer fx = fftw::alloc_complex(nc), fy = fftw::alloc_complex(nc);
+    {
+        const fftw::Plan px = fftw::plan_r2c(W, H, dx.get(), fx.get());
+        fftw_execute(px.get());
+        const fftw::Plan py = fftw::plan_r2c(W, H, dy.get(), fy.get());
+        fftw_execute(py.get());
+    }
+    // H = (conj(Dx) Fx + conj(Dy) Fy) / (|Dx|^2 + |Dy|^2) with Dx = i sin(2 pi u / W): the
+    // least-squares heights for central differences; zero where they see nothing.
+    const int half = W / 2 + 1;
+    parallel_for(std::size_t(H), 16, [&](std::size_t v0, std::size_t v1) {
+        for (int v = int(v0); v < int(v1); ++v) {
+            const double sv = std::sin(2.0 * kPi * v / H);
+            for (int u = 0; u < half; ++u) {
+                const double su = std::sin(2.0 * kPi * u / W);
+                const double denominator = su * su + sv * sv;
+                const std::size_t i = std::size_t(v) * std::size_t(half) + std::size_t(u);
+                // conj(i s) (a + i b) = s b - i s a
+                const double re = su * fx[i][1] + sv * fy[i][1], im = -(su * fx[i][0] + sv * fy[i][0]);
+                const bool visible = denominator > 1e-12;
+                fx[i][0] = visible ? re / denominator : 0.0;
+                fx[i][1] = visible ? im / denominator : 0.0;
+            }
+        }
+    });
+    {
+        const fftw::Plan inverse = fftw::plan_c2r(W, H, fx.get(), dx.get());
+        fftw_execute(inverse.get());
+    }
+    Image height(w, h, 1);
+    const double normalisation = 1.0 / double(n);
+    double mean = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) mean += dx[std::size_t(y) * std::size_t(W) + std::size_t(x)];
+    mean /= double(w) * double(h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            height.at(x, y, 0) = float((dx[std::size_t(y) * std::size_t(W) + std::size_t(x)] - mean) * normalisation);
+    return height;
+}
+
+double height_normal_consistency(const Image& height_mm, float mm_per_texel, const Image& normals, bool periodic,
+                                 const Image& mask) {
+    TDF_CHECK(normals.channels() >= 3 && mm_per_texel > 0);
+    TDF_CHECK(height_mm.width() == normals.width() && height_mm.height() == normals.height());
+    TDF_CHECK(mask.empty() || mask.pixel_count() == normals.pixel_count());
+    const Image recomputed = normals_from_height(height_mm, 1.0f / mm_per_texel, periodic);
+    double sum = 0, count = 0;
+    for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
+        if (!mask.empty() && !(mask.data()[p * std::size_t(mask.channels())] > 0)) continue;
+        const float* a = normals.data() + p * std::size_t(normals.channels());
+        const float* b = recomputed.data() + 3 * p;
+        const double length = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] + double(a[2]) * a[2]);
+        if (!(length > 0)) continue;
+        sum += (double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]) / length;
+        count += 1;
+    }
+    return count > 0 ? sum / count : 0.0;
+}
+
+ExportedHeight export_height(const Image& normals, const ExportScale& scale, const std::string& source,
+                             const Image& mask) {
+    TDF_CHECK(scale.mm_per_texel > 0);
+    ExportedHeight out;
+    out.map.height = integrate_normal_map(normals, scale.periodic, source);
+    for (float& v : out.map.height.values()) v *= scale.mm_per_texel;
+    out.map.mm_per_pixel = scale.mm_per_texel;
+    out.map.tileable = scale.periodic;
+    out.map.source = source;
+    const auto [lo, hi] = std::minmax_element(out.map.height.values().begin(), out.map.height.values().end());
+    out.min_mm = *lo, out.max_mm = *hi;
+    out.assumed_pixel_size = scale.assumed;
+    out.mean_cosine = height_normal_consistency(out.map.height, scale.mm_per_texel, normals, scale.periodic, mask);
+    return out;
+}
+
+void write_exported_height(const std::string& base, const ExportedHeight& height) {
+    write_height_map(base + "_height.exr", height.map);
+    write_height_preview_png(base + "_height.png", height.map);
+}
+
+Json exported_height_json(const ExportedHeight& height, const ExportScale& scale, const std::string& png_name,
+                          const std::string& exr_name) {
+    Json j = {{"png", png_name},
+              {"exr", exr_name},
+              {"mm_per_texel", scale.mm_per_texel},
+              {"mm_per_texel_assumed", scale.assumed},
+              {"min_mm", height.min_mm},
+              {"max_mm", height.max_mm},
+              {"mm_per_step", height.mm_per_step()},
+              {"normal_consistency_cosine", height.mean_cosine}};
+    if (scale.capture_mm_per_pixel > 0)
+        j["capture"] = {{"mm_per_pixel", scale.capture_mm_per_pixel},
+                        {"width", scale.capture_width},
+                        {"height", scale.capture_height}};
+    if (scale.mm_per_unit > 0) {
+        j["mm_per_unit"] = scale.mm_per_unit;
+        // Blender's Displace modifier: offset = strength * (texture - midlevel), in mesh units,
+        // texture = the PNG's value in [0, 1]: strength = range / mm_per_unit, midlevel = the
+        // value of height 0 (the mean surface).
+        const double range = double(height.max_mm - height.min_mm);
+        j["displacement_strength"] = range / double(scale.mm_per_unit);
+        j["displacement_midlevel"] = range > 0 ? double(-height.min_mm) / range : 0.5;
+    }
+    return j;
+}
+
+}  // namespace tdf

@@ -1,0 +1,231 @@
+// Visual loss terms on the global views (spec 5.2, 5.4): albedo matching (per pixel during
+// matching, mean colour in refinement) and visual guidance on the lambertian renders.
+// Reads: Batch (view G-buffers, hits and their surface, lights), the input albedo, the visual
+// guidance backend.
+// Writes: the loss record's visual terms, Batch::grads (d_albedo of the view hits) and, texture
+// evaluation, Batch::curvature of the view hits; StageTimes::guidance; guidance frames.
+#include "trainer_impl.h"
+
+#include <tdf/core/image_ops.h>
+#include <tdf/guidance/guidance_frames.h>
+#include <tdf/guidance/relief_shading.h>
+#include <tdf/guidance/schedule.h>
+#include <tdf/loss/image_loss.h>
+#include <tdf/render/material_sampling.h>
+
+namespace tdf {
+
+using namespace trainer_detail;
+
+// ---- 4b. Visual terms on the global views (spec 5.2, 5.4) -----------------------------------
+void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
+    const RunConfig& cfg = m_config;
+    Batch& b = *m_batch;
+    const int B = cfg.batch_size, S = cfg.resolution;
+    const bool visual_guidance = phase.visual_guidance;
+    const std::size_t view_values = std::size_t(S) * std::size_t(S) * 3;
+    b.albedo_pred.resize(std::size_t(B) * view_values);
+    b.albedo_target.resize(b.albedo_pred.size());
+    b.albedo_grad.assign(b.albedo_pred.size(), 0.0f);
+    if (visual_guidance) {
+        b.lambertian.resize(b.albedo_pred.size());
+        b.lambertian_target.resize(b.albedo_pred.size());
+        b.lambertian_grad.assign(b.albedo_pred.size(), 0.0f);
+        b.shade.assign(b.hit_pixel.size(), 0.0f);
+    }
+    GuidanceImages guidance_images;
+    render_visual_views(visual_guidance, guidance_images);
+    const ImageBatchShape shape{B, S, S, 3};
+    if (phase.albedo_weight > 0 && B > 0) {
+        const double value =
+            phase.per_pixel_albedo
+                ? mse_loss(b.albedo_pred.data(), b.albedo_target.data(), b.albedo_pred.size(), b.albedo_grad.data(),
+                           phase.albedo_weight)
+                : mean_colour_mse_loss(b.albedo_pred.data(), b.albedo_target.data(), shape, b.albedo_grad.data(),
+                                       phase.albedo_weight);
+        record.terms[phase.per_pixel_albedo ? "albedo_matching" : "albedo_mean_colour"] = phase.albedo_weight * value;
+    }
+    if (visual_guidance && B > 0) visual_guidance_terms(phase, std::move(guidance_images), record);
+    visual_terms_backward(phase);
+}
+
+// The views at the output size: the learned albedo, the input's, and with visual guidance the
+// lambertian renders of both and the guidance's control images (normals, masks, surfaces).
+void Trainer::render_visual_views(bool visual_guidance, GuidanceImages& guidance_images) {
+    const RunConfig& cfg = m_config;
+    const TriangleMesh& mesh = *m_target.mesh;
+    Batch& b = *m_batch;
+    const int P = cfg.patch_batch_size, B = cfg.batch_size, S = cfg.resolution;
+    const std::size_t view_values = std::size_t(S) * std::size_t(S) * 3;
+    std::vector<Image>& controls = guidance_images.controls;
+    std::vector<Image>& masks = guidance_images.masks;
+    std::vector<Image>& surfaces = guidance_images.surfaces;
+    for (int k = 0; k < B; ++k) {
+        const std::size_t gi = std::size_t(P + k);
+        const GBuffer& g = b.gbuffers[gi];
+        const std::vector<int>& point_of = b.point_of[gi];
+        const VisualView& view = b.views[std::size_t(k)];
+        const bool resized = g.width != S || g.height != S;
+        // Renders composited on white at the internal size, then resized to S x S (spec 3.8).
+        const auto render_internal = [&](auto&& colour_of_hit, float* out) {
+            if (b.internal.width() != g.width || b.internal.height() != g.height) b.internal = Image(g.width, g.height, 3);
+            std::fill(b.internal.values().begin(), b.internal.values().end(), 1.0f);  // white background
+            parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t p = begin; p < end; ++p) {
+                    const int q = point_of[p];
+                    if (q < 0) continue;
+                    const Vec3f c = colour_of_hit(p, std::size_t(q));
+                    std::copy(&c.x, &c.x + 3, b.internal.data() + 3 * p);
+                }
+            });
+            copy_into(resized ? resize_bilinear(b.internal, S, S) : b.internal, out);
+        };
+        float* pred = b.albedo_pred.data() + std::size_t(k) * view_values;
+        render_internal([&](std::size_t, std::size_t q) { return b.outputs[q].albedo; }, pred);
+        // The input's albedo: in texture space its bake over the atlas, sampled exactly as the learned
+        // map is (same taps), so the learned map at its start renders identical images and only
+        // what guidance asks for changes it; per pixel, the material itself (spec 3.1 step 5).
+        const auto input_albedo = [&](std::size_t p, std::size_t q) {
+            if (!texture_space()) return sample_albedo(*m_target.material, mesh, g, p, true);
+            return b.target[q];
+        };
+        render_internal(input_albedo, b.albedo_target.data() + std::size_t(k) * view_values);
+        if (visual_guidance) {
+            const Vec3f light = b.lights[std::size_t(k)];
+            const ViewRotation rot = view_rotation(view.camera);
+            render_internal(
+                [&](std::size_t p, std::size_t q) {
+                    // The shading normal is detached (spec 3.4): only the albedo gets gradient.
+                    const Vec3f n_s = compose_shading_normal(frame_at(g, p), b.outputs[q].normal);
+                    b.shade[q] = training_shade(n_s, light, g.position[p]);
+                    return lambertian(b.outputs[q].albedo, b.shade[q]);
+                },
+                b.lambertian.data() + std::size_t(k) * view_values);
+            // The input asset under the same light and relief: what relief-aware refinement keeps.
+            render_internal(
+                [&](std::size_t p, std::size_t q) { return lambertian(input_albedo(p, q), b.shade[q]); },
+                b.lambertian_target.data() + std::size_t(k) * view_values);
+            Image normals_internal(g.width, g.height, 3, 0.0f), mask_internal(g.width, g.height, 1, 0.0f);
+            Image surface_internal(g.width, g.height, 3, 0.0f);
+            parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t p = begin; p < end; ++p) {
+                    const int q = point_of[p];
+                    if (q < 0) continue;
+                    const Vec3f n_v = tangent_to_view(g, p, rot, b.outputs[std::size_t(q)].normal);
+                    std::copy(&n_v.x, &n_v.x + 3, normals_internal.data() + 3 * p);
+                    const Vec3f s_v = view_space_normal(rot, g.normal[p]);
+                    std::copy(&s_v.x, &s_v.x + 3, surface_internal.data() + 3 * p);
+                    mask_internal.data()[p] = 1.0f;
+                }
+            });
+            controls.push_back(to_bae_control(resized ? resize_bilinear(normals_internal, S, S) : normals_internal));
+            masks.push_back(resized ? resize_bilinear(mask_internal, S, S) : mask_internal);
+            surfaces.push_back(resized ? resize_bilinear(surface_internal, S, S) : surface_internal);
+        }
+    }
+}
+
+// Visual guidance (spec 5.4): the backend refines the lambertian renders; the loss pulls them
+// towards the refined images (background forced to white).
+void Trainer::visual_guidance_terms(const Phase& phase, GuidanceImages guidance_images, LossRecord& record) {
+    const RunConfig& cfg = m_config;
+    Batch& b = *m_batch;
+    const int B = cfg.batch_size, S = cfg.resolution;
+    const std::size_t view_values = std::size_t(S) * std::size_t(S) * 3;
+    const ImageBatchShape shape{B, S, S, 3};
+    const auto g0 = Clock::now();
+    GuidanceRequest request;
+    request.kind = GuidanceKind::Visual;
+    request.prompt = m_target.prompt;
+    request.negative_prompt = kNegativePrompt;
+    request.strength = visual_guidance_strength(phase.i, cfg.init_iterations, cfg.iterations);
+    request.iteration = phase.i;
+    request.seed = m_seed ^ (std::uint64_t(phase.i) << 20) ^ 0x5649u;
+    for (int k = 0; k < B; ++k) {
+        Image image(S, S, 3), reference(S, S, 3);
+        std::copy_n(b.lambertian.data() + std::size_t(k) * view_values, view_values, image.data());
+        std::copy_n(b.lambertian_target.data() + std::size_t(k) * view_values, view_values, reference.data());
+        request.images.push_back(std::move(image));
+        request.reference_images.push_back(std::move(reference));
+    }
+    request.control = std::move(guidance_images.controls);
+    request.masks = std::move(guidance_images.masks);
+    request.surface_normals = std::move(guidance_images.surfaces);
+    GuidanceResult result = m_visual_guidance->refine(request);
+    validate_result(request, result, m_visual_guidance->name());
+    if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, phase.i, request, result);
+    std::vector<float> refined(b.lambertian.size());
+    for (int k = 0; k < B; ++k) {
+        // Background forced to white (spec 5.4).
+        Image& r = result.refined[std::size_t(k)];
+        const Image& m = request.masks[std::size_t(k)];
+        for (std::size_t p = 0; p < r.pixel_count(); ++p)
+            if (m.data()[p] == 0.0f) std::fill_n(r.data() + 3 * p, 3, 1.0f);
+        copy_into(r, refined.data() + std::size_t(k) * view_values);
+    }
+    const float w = cfg.weights.visual_guidance, ws = cfg.weights.visual_guidance_structural;
+    if (cfg.visual_guidance_loss == "mse") {
+        record.terms["visual_guidance_mse"] =
+            w * mse_loss(b.lambertian.data(), refined.data(), refined.size(), b.lambertian_grad.data(), w);
+    } else {
+        const double l1 = l1_loss(b.lambertian.data(), refined.data(), refined.size(), b.lambertian_grad.data(), w);
+        const double structural =
+            ws > 0 ? ssim_loss(b.lambertian.data(), refined.data(), shape, b.lambertian_grad.data(), w * ws) : 0.0;
+        record.terms["visual_guidance_l1"] = w * l1;
+        record.terms["visual_guidance_structural"] = w * ws * structural;
+    }
+    m_times.guidance += seconds_since(g0);
+}
+
+// The visual terms' gradients back through the resize (its adjoint) to the internal pixels, then
+// to the surface's albedo; texture evaluation also sets the view hits' Jacobi curvature.
+void Trainer::visual_terms_backward(const Phase& phase) {
+    const RunConfig& cfg = m_config;
+    Batch& b = *m_batch;
+    const int P = cfg.patch_batch_size, B = cfg.batch_size, S = cfg.resolution;
+    const bool visual_guidance = phase.visual_guidance;
+    const std::size_t view_values = std::size_t(S) * std::size_t(S) * 3;
+    for (int k = 0; k < B; ++k) {
+        const std::size_t gi = std::size_t(P + k);
+        const GBuffer& g = b.gbuffers[gi];
+        const std::vector<int>& point_of = b.point_of[gi];
+        const bool resized = g.width != S || g.height != S;
+        const auto to_internal = [&](const std::vector<float>& grad) {
+            Image out(S, S, 3);
+            std::copy_n(grad.data() + std::size_t(k) * view_values, view_values, out.data());
+            return resized ? resize_bilinear_adjoint(out, g.width, g.height) : out;
+        };
+        const Image albedo_grad = to_internal(b.albedo_grad);
+        const Image lambertian_grad = visual_guidance ? to_internal(b.lambertian_grad) : Image();
+        // Jacobi denominators: per value, 2 w / N for squared errors (an L1 term counts as a
+        // squared error at a 0.1 scale), spread over the internal pixels as the resize spreads
+        // the gradients.
+        const double values = double(b.albedo_pred.size());
+        const double ssaa_share = double(S) * double(S) / (double(g.width) * double(g.height));
+        const double albedo_kappa =
+            (phase.per_pixel_albedo ? 2.0 * double(phase.albedo_weight) / values : 0.0) * ssaa_share;
+        const double lambertian_kappa =
+            visual_guidance ? (cfg.visual_guidance_loss == "mse" ? 2.0 : 10.0) * double(cfg.weights.visual_guidance) /
+                                  values * ssaa_share
+                            : 0.0;
+        parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t p = begin; p < end; ++p) {
+                const int q = point_of[p];
+                if (q < 0) continue;
+                if (texture_space()) {
+                    const double shade = visual_guidance ? double(b.shade[std::size_t(q)]) : 0.0;
+                    b.curvature[std::size_t(q)] = float(albedo_kappa + lambertian_kappa * shade * shade);
+                }
+                const float* ga = albedo_grad.data() + 3 * p;
+                Vec3f d{ga[0], ga[1], ga[2]};
+                if (visual_guidance) {
+                    const float* gl = lambertian_grad.data() + 3 * p;
+                    d += lambertian_backward(b.shade[std::size_t(q)], Vec3f{gl[0], gl[1], gl[2]});
+                }
+                b.grads[std::size_t(q)].d_albedo += d;
+            }
+        });
+    }
+}
+
+}  // namespace tdf
