@@ -1,5 +1,8 @@
 // End-to-end checks of `tdf optimize` on the shipped pebble sphere at a small size: quality after
 // the matching phase, determinism across thread counts, resume, exports and bad input.
+#include <tdf/atlas/surface_texels.h>
+#include <tdf/atlas/uv_raster.h>
+#include <tdf/tactile/height_export.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/config.h>
 #include <tdf/core/error.h>
@@ -145,6 +148,33 @@ TEST(Optimize, ExportedHeightReproducesTheExportedNormalMap) {
     EXPECT_NEAR(report["height_map"]["mm_per_texel"].get<double>(), double(height.mm_per_pixel), 1e-6);
     const std::string glb = read_text_file(base + ".glb");
     EXPECT_NE(glb.find("\"tdf_height\""), std::string::npos);
+    // The relief's ambient occlusion beside it, in the GLB's occlusionTexture: the pebbles'
+    // grooves shade, the flat tops do not.
+    EXPECT_NE(glb.find("\"occlusionTexture\""), std::string::npos);
+    const Image ao = read_image(base + "_ao.png");
+    EXPECT_EQ(ao.width(), height.height.width());
+    const double visibility = report["height_map"]["ambient_occlusion"]["mean_visibility"].get<double>();
+    EXPECT_GT(visibility, 0.7);
+    EXPECT_LT(visibility, 0.99);
+    // The charts meet level: across the sphere's u = 0/1 seam the exported heights step by far
+    // less than the texture-space integration's (which knows nothing of the seam) do.
+    const TriangleMesh mesh = load_mesh(base + ".obj");
+    UvRaster raster = rasterize_uv(mesh, height.height.width());
+    add_partial_texels(mesh, raster);  // as the bake
+    const SurfaceTexels surface = surface_texels(mesh, raster);
+    ASSERT_GT(surface.seam_links.size(), 100u);
+    EXPECT_EQ(report["height_map"]["seam_links"].get<std::size_t>(), surface.seam_links.size());
+    Image texture_space = integrate_normal_map(normals, false);
+    for (float& v : texture_space.values()) v *= height.mm_per_pixel;
+    const auto mean_step = [&](const Image& h) {
+        double total = 0;
+        for (const auto& [a, b] : surface.seam_links)
+            total += std::abs(h.data()[surface.texels[std::size_t(a)]] - h.data()[surface.texels[std::size_t(b)]]);
+        return total / double(surface.seam_links.size());
+    };
+    std::printf("mean height step across the seam: %.4f mm exported, %.4f mm texture-space\n",
+                mean_step(height.height), mean_step(texture_space));
+    EXPECT_LT(mean_step(height.height), 0.25 * mean_step(texture_space));
 }
 
 TEST(Optimize, SameSeedSameFilesOnOneAndTwoThreads) {
