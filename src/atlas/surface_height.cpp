@@ -109,6 +109,25 @@ int conjugate_gradients(const Graph& g, const std::vector<double>& b, std::vecto
     return k;
 }
 
+/// Covered texel i's neighbour at (x + dx, y + dy) when it is covered and on i's chart, else -1.
+int chart_neighbour(const SurfaceTexels& s, std::size_t i, int dx, int dy) {
+    const int x = int(s.texels[i] % std::uint32_t(s.size)) + dx, y = int(s.texels[i] / std::uint32_t(s.size)) + dy;
+    if (x < 0 || y < 0 || x >= s.size || y >= s.size) return -1;
+    const int j = s.node[std::size_t(y) * std::size_t(s.size) + std::size_t(x)];
+    return j >= 0 && s.chart[std::size_t(j)] == s.chart[i] ? j : -1;
+}
+
+/// The change of `height` (the map, indexed by texel) per texel step along (dx, dy) at covered
+/// texel i: central where both neighbours are on its chart, else one-sided, else 0.
+double chart_difference(const SurfaceTexels& s, const float* height, std::size_t i, int dx, int dy) {
+    const int lo = chart_neighbour(s, i, -dx, -dy), hi = chart_neighbour(s, i, dx, dy);
+    const auto at = [&](int j) { return double(height[s.texels[std::size_t(j)]]); };
+    if (lo >= 0 && hi >= 0) return 0.5 * (at(hi) - at(lo));
+    if (hi >= 0) return at(hi) - at(int(i));
+    if (lo >= 0) return at(int(i)) - at(lo);
+    return 0.0;
+}
+
 /// The normal equations of the texel graph: A (unit weights) and b_i = -sum_j g_ij, g_ij the
 /// wanted h_j - h_i in mm.
 struct Problem {
@@ -120,26 +139,12 @@ struct Problem {
 Problem texel_problem(const Image& texture_mm, float texture_mm_per_texel, const SurfaceTexels& s, float mm_per_unit,
                       HeightMetric metric) {
     const std::size_t n = s.covered_count();
-    const auto node_at = [&](std::size_t i, int nx, int ny) {
-        if (nx < 0 || ny < 0 || nx >= s.size || ny >= s.size) return -1;
-        const int j = s.node[std::size_t(ny) * std::size_t(s.size) + std::size_t(nx)];
-        return j >= 0 && s.chart[std::size_t(j)] == s.chart[i] ? j : -1;
-    };
     const auto height = [&](int j) { return double(texture_mm.data()[s.texels[std::size_t(j)]]); };
-    // The texture-space heights' slope along T at each texel: central where both neighbours are
-    // on its chart, else one-sided.
+    // The texture-space heights' slope along T at each texel.
     std::vector<double> slope_t(n, 0.0);
     parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-            const int x = int(s.texels[i] % std::uint32_t(s.size)), y = int(s.texels[i] / std::uint32_t(s.size));
-            const int lo = node_at(i, x - 1, y), hi = node_at(i, x + 1, y);
-            const double here = height(int(i));
-            const double d = lo >= 0 && hi >= 0 ? 0.5 * (height(hi) - height(lo))
-                             : hi >= 0          ? height(hi) - here
-                             : lo >= 0          ? here - height(lo)
-                                                : 0.0;
-            slope_t[i] = d / double(texture_mm_per_texel);
-        }
+        for (std::size_t i = begin; i < end; ++i)
+            slope_t[i] = chart_difference(s, texture_mm.data(), i, 1, 0) / double(texture_mm_per_texel);
     });
     Problem problem;
     problem.rhs.assign(n, 0.0);
@@ -155,18 +160,17 @@ Problem texel_problem(const Image& texture_mm, float texture_mm_per_texel, const
     // for and taken over the surface step between the two texels.
     const double m = mm_per_unit, inv = 1.0 / double(texture_mm_per_texel);
     for (std::size_t i = 0; i < n; ++i) {
-        const int x = int(s.texels[i] % std::uint32_t(s.size)), y = int(s.texels[i] / std::uint32_t(s.size));
         const TexelStep& a = s.step[i];
         if (metric == HeightMetric::Map) {  // the texture-space differences as they are
-            if (const int j = node_at(i, x + 1, y); j >= 0) link(int(i), j, height(j) - height(int(i)));
-            if (const int j = node_at(i, x, y + 1); j >= 0) link(int(i), j, height(j) - height(int(i)));
+            if (const int j = chart_neighbour(s, i, 1, 0); j >= 0) link(int(i), j, height(j) - height(int(i)));
+            if (const int j = chart_neighbour(s, i, 0, 1); j >= 0) link(int(i), j, height(j) - height(int(i)));
             continue;
         }
-        if (const int j = node_at(i, x + 1, y); j >= 0) {
+        if (const int j = chart_neighbour(s, i, 1, 0); j >= 0) {
             const double along_t = (height(j) - height(int(i))) * inv;
             link(int(i), j, m * 0.5 * (double(a.along_x_t) + s.step[std::size_t(j)].along_x_t) * along_t);
         }
-        if (const int j = node_at(i, x, y + 1); j >= 0) {
+        if (const int j = chart_neighbour(s, i, 0, 1); j >= 0) {
             const TexelStep& b = s.step[std::size_t(j)];
             const double along_b = -(height(j) - height(int(i))) * inv;  // a row down is -v
             const double along_t = 0.5 * (slope_t[i] + slope_t[std::size_t(j)]);
@@ -260,24 +264,7 @@ double surface_height_consistency(const Image& height_mm, const Image& normals, 
     std::vector<double> cosine(n, 0.0);
     parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
-            const int x = int(s.texels[i] % std::uint32_t(s.size)), y = int(s.texels[i] / std::uint32_t(s.size));
-            const auto at = [&](int nx, int ny, double& h) {
-                if (nx < 0 || ny < 0 || nx >= s.size || ny >= s.size) return false;
-                const int j = s.node[std::size_t(ny) * std::size_t(s.size) + std::size_t(nx)];
-                if (j < 0 || s.chart[std::size_t(j)] != s.chart[i]) return false;
-                h = height_mm.at(nx, ny, 0);
-                return true;
-            };
-            // Central difference where both neighbours are on the chart, else one-sided.
-            const auto difference = [&](int dx, int dy) {
-                double lo = 0, hi = 0;
-                const double here = height_mm.at(x, y, 0);
-                const bool has_lo = at(x - dx, y - dy, lo), has_hi = at(x + dx, y + dy, hi);
-                if (has_lo && has_hi) return 0.5 * (hi - lo);
-                if (has_hi) return hi - here;
-                if (has_lo) return here - lo;
-                return 0.0;
-            };
+            const auto difference = [&](int dx, int dy) { return chart_difference(s, height_mm.data(), i, dx, dy); };
             const TexelStep& d = s.step[i];
             // Invert gx = m st ax, gy = m (st ayt + sb ayb) for the slopes along T and B.
             const double st = difference(1, 0) / (double(mm_per_unit) * d.along_x_t);
