@@ -10,21 +10,46 @@
 #include <tdf/tactile/touch_comparison.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace tdf {
 
 namespace {
 
-/// What a touch is compared with: the part's name ("" for a one-part scene) and its capture.
+/// What a touch is compared with: the part's name ("" for a one-part scene), its capture, and
+/// the sensor pitch at which the capture's pixels lie on the asset.
 struct PartCapture {
     std::string name, image;
+    TactileMap map;
+    float pitch_mm = 0;       // one capture pixel on the asset, mm
+    float own_pitch_mm = 0;   // the capture's own pixel (metadata, the layout's, else GelSight Mini's)
     std::vector<TouchPoint> points;  // accepted touch points on this part
 };
 
-std::vector<PartCapture> part_captures(const SceneAssets& assets, const PartsSpec& parts) {
+/// One-part scenes: the capture's pixel as the export scale took it. Parts: each part's map lies
+/// on the atlas with its own layout; in atlas mode `repeat` times over the atlas, whose UV unit
+/// spans `uv_mm` (the export's scale, from the scene's own map), so one of its pixels spans
+/// uv_mm / (its size x repeat) there: a part laid finer than its capture is touched at a finer
+/// pitch and its capture measured at that pitch (the relief the scene asked for, at its scale).
+std::vector<PartCapture> part_captures(const SceneAssets& assets, const PartsSpec& parts, const ExportScale& scale,
+                                       float uv_mm) {
     std::vector<PartCapture> captures;
-    if (!parts.enabled()) return {{"", assets.description.tactile_images.front(), {}}};
-    for (const PartSpec& p : parts.parts) captures.push_back({p.name, p.tactile_images.front(), {}});
+    if (!parts.enabled()) {
+        PartCapture c{"", assets.description.tactile_images.front(), {}, scale.capture_mm_per_pixel,
+                      scale.capture_mm_per_pixel, {}};
+        c.map = load_tactile_map(c.image);
+        return {std::move(c)};
+    }
+    for (const PartSpec& p : parts.parts) {
+        PartCapture c{p.name, p.tactile_images.front(), {}, 0, 0, {}};
+        c.map = load_tactile_map(c.image);
+        c.own_pitch_mm = p.layout.mm_per_pixel > 0 ? p.layout.mm_per_pixel
+                         : c.map.mm_per_pixel > 0  ? c.map.mm_per_pixel
+                                                   : kGelSightMiniMmPerPixel;
+        const double side = std::sqrt(double(c.map.normals.width()) * double(c.map.normals.height()));
+        c.pitch_mm = p.layout.mode == "physical" ? c.own_pitch_mm : float(double(uv_mm) / (side * double(p.layout.repeat)));
+        captures.push_back(std::move(c));
+    }
     return captures;
 }
 
@@ -40,7 +65,7 @@ std::size_t part_of_face(const TriangleMesh& mesh, int face, const std::vector<P
 
 /// Draws points until every part holds kRoundTripTouches that take the pad (shrinking it by 3/4
 /// steps, down to 32 px, where a point does not take it); the pad stays at its smallest.
-void draw_touch_points(const ReliefAsset& asset, std::vector<PartCapture>& captures, GelSightPad& pad,
+void draw_touch_points(const ReliefAsset& asset, std::vector<PartCapture>& captures, int& pad_pixels,
                        std::uint64_t seed) {
     const int wanted = kRoundTripTouches * int(captures.size());
     const std::vector<TouchPoint> candidates =
@@ -52,13 +77,13 @@ void draw_touch_points(const ReliefAsset& asset, std::vector<PartCapture>& captu
         if (int(part.points.size()) == kRoundTripTouches) continue;
         while (true) {
             try {
-                simulate_touch(asset, p, pad);
+                simulate_touch(asset, p, GelSightPad{pad_pixels, pad_pixels, part.pitch_mm});
                 part.points.push_back(p);
                 ++accepted;
                 break;
             } catch (const Error&) {
-                if (pad.width * 3 / 4 < 32) break;  // this point does not take even a small pad
-                pad.width = pad.height = pad.width * 3 / 4;
+                if (pad_pixels * 3 / 4 < 32) break;  // this point does not take even a small pad
+                pad_pixels = pad_pixels * 3 / 4;
             }
         }
     }
@@ -101,11 +126,10 @@ Json tactile_roundtrip(const std::string& folder, const SceneAssets& assets, con
     if (!(scale.mm_per_texel > 0) || !(scale.capture_mm_per_pixel > 0) || assets.description.tactile_images.empty())
         return Json();
     const std::unique_ptr<ReliefAsset> asset = load_relief_asset(folder);
-    GelSightPad pad;
-    pad.mm_per_pixel = scale.capture_mm_per_pixel;
-    pad.width = pad.height = std::min(scale.capture_width, scale.capture_height);
-    std::vector<PartCapture> captures = part_captures(assets, parts);
-    draw_touch_points(*asset, captures, pad, seed);
+    const float uv_mm = scale.mm_per_texel * float(asset->height.height.width());
+    std::vector<PartCapture> captures = part_captures(assets, parts, scale, uv_mm);
+    int pad_pixels = std::min(scale.capture_width, scale.capture_height);
+    draw_touch_points(*asset, captures, pad_pixels, seed);
     const std::string touch_folder = folder + "/touch";
     ensure_folder(touch_folder);
     Json uvs = Json::array(), touch_parts = Json::array(), per_part = Json::array();
@@ -113,6 +137,7 @@ Json tactile_roundtrip(const std::string& folder, const SceneAssets& assets, con
     int touched = 0, index = 0;
     for (const PartCapture& part : captures) {
         if (part.points.empty()) continue;
+        const GelSightPad pad{pad_pixels, pad_pixels, part.pitch_mm};
         std::vector<ReliefMeasure> measures;
         for (const TouchPoint& p : part.points) {
             Image preview;
@@ -121,17 +146,18 @@ Json tactile_roundtrip(const std::string& folder, const SceneAssets& assets, con
             uvs.push_back({p.uv.x, p.uv.y});
             touch_parts.push_back(part.name);
         }
-        const TactileMap capture = load_tactile_map(part.image);
-        const TouchRoundTrip r =
-            compare_touches(measure_capture(capture.normals, scale.capture_mm_per_pixel, pad.width), measures);
+        const TouchRoundTrip r = compare_touches(measure_capture(part.map.normals, part.pitch_mm, pad.width), measures);
         const std::string capture_png = part.name.empty() ? "capture_gelsight.png" : "capture_" + part.name + "_gelsight.png";
-        write_png(touch_folder + "/" + capture_png, capture_preview(capture.normals, pad), 8, Quantize::Round);
+        write_png(touch_folder + "/" + capture_png, capture_preview(part.map.normals, pad), 8, Quantize::Round);
         const double n = double(measures.size());
         tilt += r.tilt_ratio * n, rms += r.height_rms_ratio * n, spectrum += r.spectrum_distance * n;
         touched += int(measures.size());
         Json j = r.to_json();
         j["name"] = part.name, j["capture_image"] = part.image, j["capture_preview"] = "touch/" + capture_png;
         j["touch_count"] = int(measures.size()), j["within_aim"] = within_aim(r);
+        j["pitch_mm"] = part.pitch_mm;
+        // How much finer (< 1) or coarser the scene lays this part's relief than it was captured.
+        if (!part.name.empty()) j["relief_scale"] = part.pitch_mm / part.own_pitch_mm;
         per_part.push_back(j);
     }
     if (touched == 0) {
@@ -147,18 +173,20 @@ Json tactile_roundtrip(const std::string& folder, const SceneAssets& assets, con
     j["touch_count"] = touched;
     if (captures.size() > 1) j["parts"] = per_part, j["touch_parts"] = touch_parts;
     j.erase("name");
-    j["pad"] = {{"width", pad.width}, {"height", pad.height}, {"mm_per_pixel", pad.mm_per_pixel}};
+    j["pad"] = {{"width", pad_pixels}, {"height", pad_pixels}, {"mm_per_pixel", captures.front().pitch_mm}};
     j["touch_uvs"] = uvs;
     j["within_aim"] = within_aim(all) && std::all_of(per_part.begin(), per_part.end(), [](const Json& p) {
                           return p["within_aim"].get<bool>();
                       });
     log_info("tactile round trip ({} touches, {} px pad): tilt ratio {:.3f}, height RMS ratio {:.3f}, spectrum "
              "distance {:.3f}",
-             touched, pad.width, all.tilt_ratio, all.height_rms_ratio, all.spectrum_distance);
+             touched, pad_pixels, all.tilt_ratio, all.height_rms_ratio, all.spectrum_distance);
     for (const Json& p : per_part)
         if (captures.size() > 1)
-            log_info("  part {} ({} touches): tilt ratio {:.3f}, height RMS ratio {:.3f}", p["name"].get<std::string>(),
-                     p["touch_count"].get<int>(), p["tilt_ratio"].get<double>(), p["height_rms_ratio"].get<double>());
+            log_info("  part {} ({} touches at {:.4g} mm per pixel, relief laid at {:.3g}x its capture's size): tilt ratio "
+                     "{:.3f}, height RMS ratio {:.3f}",
+                     p["name"].get<std::string>(), p["touch_count"].get<int>(), p["pitch_mm"].get<double>(),
+                     p["relief_scale"].get<double>(), p["tilt_ratio"].get<double>(), p["height_rms_ratio"].get<double>());
     return j;
 }
 

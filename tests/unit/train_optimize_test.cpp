@@ -379,3 +379,35 @@ TEST(Optimize, PromptObjectComesFromTheSceneKeyTheMeshFileOrItsNodes) {
     d.object_name = "a ceramic mug";
     EXPECT_EQ(object_name_for_prompt(d, mesh), "a ceramic mug");
 }
+
+// Issue 24's round trip on a multi-part scene: every part is touched and compared with its own
+// capture, at the pitch its layout lays the capture's pixels on the asset. two_part_sphere's
+// export scale comes from its 128 px ribs map once over the atlas (10.88 mm per UV unit); the
+// cap lays the same map 3 times (a pixel 10.88 / 384 mm), the base the 256 px pebbles twice
+// (10.88 / 512 mm): relief scales 1/3 and 1/4 of GelSight Mini's 0.085 mm.
+TEST(Optimize, RoundTripTouchesEveryPartAgainstItsOwnCapture) {
+    OptimizeOptions options;
+    options.scene_path = test::source_dir() + "/scenes/two_part_sphere/scene.json";
+    options.overrides = small_run(4, 2);
+    options.output_dir = test::scratch_dir() + "/roundtrip_parts";
+    options.name = "two";
+    fs::remove_all(options.output_dir);
+    run_optimize(options);
+    const Json report = parse_json(read_text_file(options.output_dir + "/two_report.json"), "report");
+    ASSERT_TRUE(report.contains("tactile_roundtrip")) << report.dump();
+    const Json& trip = report["tactile_roundtrip"];
+    ASSERT_EQ(trip["parts"].size(), 2u);
+    const double expected_scale[] = {10.88 / 384.0 / 0.085, 10.88 / 512.0 / 0.085};
+    int touches = 0;
+    for (std::size_t k = 0; k < 2; ++k) {
+        const Json& part = trip["parts"][k];
+        EXPECT_EQ(part["name"], k == 0 ? "cap" : "base");
+        EXPECT_NEAR(part["relief_scale"].get<double>(), expected_scale[k], 0.01 * expected_scale[k]);
+        EXPECT_GT(part["touch_count"].get<int>(), 0);
+        EXPECT_TRUE(fs::exists(options.output_dir + "/" + part["capture_preview"].get<std::string>()));
+        touches += part["touch_count"].get<int>();
+    }
+    EXPECT_EQ(trip["touch_count"].get<int>(), touches);
+    ASSERT_EQ(trip["touch_parts"].size(), std::size_t(touches));
+    for (const Json& name : trip["touch_parts"]) EXPECT_TRUE(name == "cap" || name == "base");
+}
