@@ -136,9 +136,10 @@ std::string touch_section(const RunReport& r, const std::string& folder) {
                             "class=\"num\">{:.3f} / {:.3f}</td></tr>\n",
                             html_escape(part.value("name", "")), part.value("touch_count", 0),
                             part.value("tilt_ratio", 0.0), part.value("height_rms_ratio", 0.0));
-    html += "</table>\n<p>Tilt and height RMS ratios: the virtual GelSight's touches over the input capture's "
-            "contact region (aim [0.85, 1.15]); spectrum distance: half the L1 distance of their detail "
-            "energy per octave (0 = the same).</p>\n<div class=\"figures\">\n";
+    html += "</table>\n<p>Tilt and height RMS ratios: the virtual GelSight's touches over the input capture's, "
+            "the whole map in pad-sized windows, as the asset carries it (aim [0.85, 1.15]); spectrum distance: half "
+            "the L1 distance of their detail energy per octave (0 = the same). Texel size: the one the height map's "
+            "slopes were integrated over (map or surface).</p>\n<div class=\"figures\">\n";
     for (const ReportImage& t : r.touches)
         html += fmt::format("<figure>{}<figcaption>{}</figcaption></figure>\n", image_tag(t.path, folder, t.caption),
                             html_escape(t.caption));
