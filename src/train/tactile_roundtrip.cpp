@@ -63,29 +63,48 @@ std::size_t part_of_face(const TriangleMesh& mesh, int face, const std::vector<P
     return 0;
 }
 
-/// Draws points until every part holds kRoundTripTouches that take the pad (shrinking it by 3/4
-/// steps, down to 32 px, where a point does not take it); the pad stays at its smallest.
+/// Whether every pixel of `touch` lies on part `k` (a touch across two parts would measure both
+/// reliefs against one capture).
+bool on_one_part(const TriangleMesh& mesh, const SimulatedTouch& touch, std::size_t k,
+                 const std::vector<PartCapture>& captures) {
+    if (captures.size() < 2) return true;
+    return std::all_of(touch.triangles.begin(), touch.triangles.end(),
+                       [&](int face) { return face >= 0 && part_of_face(mesh, face, captures) == k; });
+}
+
+/// Draws points until every part holds kRoundTripTouches that take the pad. A point where the
+/// pad misses the mesh shrinks the pad by 3/4 (down to 32 px; it stays at its smallest); a point
+/// whose pad crosses into another part is skipped. When a part ends with fewer than half its
+/// touches (its region narrower than the pad), the pad shrinks and the drawing starts again.
 void draw_touch_points(const ReliefAsset& asset, std::vector<PartCapture>& captures, int& pad_pixels,
                        std::uint64_t seed) {
     const int wanted = kRoundTripTouches * int(captures.size());
     const std::vector<TouchPoint> candidates =
         random_touch_points(asset.mesh, 8 * wanted, seed ^ 0x544f554348ULL);  // "TOUCH"
-    int accepted = 0;
-    for (const TouchPoint& p : candidates) {
-        if (accepted == wanted) break;
-        PartCapture& part = captures[part_of_face(asset.mesh, p.triangle, captures)];
-        if (int(part.points.size()) == kRoundTripTouches) continue;
-        while (true) {
-            try {
-                simulate_touch(asset, p, GelSightPad{pad_pixels, pad_pixels, part.pitch_mm});
-                part.points.push_back(p);
-                ++accepted;
-                break;
-            } catch (const Error&) {
-                if (pad_pixels * 3 / 4 < 32) break;  // this point does not take even a small pad
-                pad_pixels = pad_pixels * 3 / 4;
+    while (true) {
+        for (PartCapture& c : captures) c.points.clear();
+        int accepted = 0;
+        for (const TouchPoint& p : candidates) {
+            if (accepted == wanted) break;
+            const std::size_t k = part_of_face(asset.mesh, p.triangle, captures);
+            PartCapture& part = captures[k];
+            if (int(part.points.size()) == kRoundTripTouches) continue;
+            while (true) {
+                try {
+                    const SimulatedTouch t = simulate_touch(asset, p, GelSightPad{pad_pixels, pad_pixels, part.pitch_mm});
+                    if (on_one_part(asset.mesh, t, k, captures)) part.points.push_back(p), ++accepted;
+                    break;
+                } catch (const Error&) {
+                    if (pad_pixels * 3 / 4 < 32) break;  // this point does not take even a small pad
+                    pad_pixels = pad_pixels * 3 / 4;
+                }
             }
         }
+        const bool enough = std::all_of(captures.begin(), captures.end(), [](const PartCapture& c) {
+            return 2 * int(c.points.size()) >= kRoundTripTouches;
+        });
+        if (enough || pad_pixels * 3 / 4 < 32) return;
+        pad_pixels = pad_pixels * 3 / 4;
     }
 }
 

@@ -64,6 +64,7 @@ struct SimulatedTouch {
     HeightMap height;  ///< pad-sized, mm above the lowest point, mm_per_pixel = the pad's pitch
     Image normals;     ///< decoded tangent-space normals of `height` (normals_from_height)
     Image preview;     ///< RGB: the normals lit by three coloured lights, like a GelSight image
+    std::vector<int> triangles;  ///< per pad pixel (row-major), the mesh face under it
 };
 
 /// Presses `pad` at `point`. Throws tdf::Error when a pixel of the pad misses the mesh (the
