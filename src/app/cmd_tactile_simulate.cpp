@@ -25,7 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct SimulateArgs {
-    std::string folder, at, out, capture, capture_area = "whole";
+    std::string folder, at, out, capture, capture_area = "auto";
     int points = 0, pad_pixels = 0;
     float pitch_mm = 0;
     std::uint64_t seed = 0;
@@ -108,7 +108,9 @@ int run_simulate(const SimulateArgs& a) {
     if (!a.capture.empty()) {
         const TactileMap capture = load_tactile_map(a.capture);
         const float pitch = capture.mm_per_pixel > 0 ? capture.mm_per_pixel : pad.mm_per_pixel;
-        const CaptureArea area = a.capture_area == "contact" ? CaptureArea::Contact : CaptureArea::Whole;
+        const CaptureArea area = a.capture_area == "contact" ? CaptureArea::Contact
+                                 : a.capture_area == "whole" ? CaptureArea::Whole
+                                                             : CaptureArea::Auto;
         const TouchRoundTrip r =
             compare_touches(measure_capture(capture.normals, pitch, std::min(pad.width, pad.height), area), measures);
         summary["tactile_roundtrip"] = r.to_json();
@@ -142,9 +144,9 @@ Command register_tactile_simulate(CLI::App& tactile) {
     app->add_option("--capture", a->capture,
                     "input capture (tactile normal map) to compare with: tilt, height RMS and spectrum");
     app->add_option("--capture-area", a->capture_area,
-                    "what of --capture to compare with: whole (all of it, as the asset carries a scene's map) or "
-                    "contact (its textured region, for a raw GelSight capture)")
-        ->check(CLI::IsMember({"whole", "contact"}))
+                    "what of --capture to compare with: whole (all of it: a tileable map is surface everywhere), "
+                    "contact (its textured region: a raw GelSight capture), auto (contact if it does not tile)")
+        ->check(CLI::IsMember({"auto", "whole", "contact"}))
         ->capture_default_str();
     app->add_option("-o,--output", a->out, "output folder (default <asset_folder>/touch)");
     app->fallthrough();

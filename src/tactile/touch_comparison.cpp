@@ -73,10 +73,19 @@ ReliefMeasure measure_relief(const Image& raw_height_mm, float mm_per_pixel, con
     return m;
 }
 
+CaptureArea resolve_capture_area(const Image& normals, CaptureArea area) {
+    if (area != CaptureArea::Auto) return area;
+    const SeamStatistics wrap = normal_map_wrap_statistics(normals);
+    return wrap.wrap_ratio_columns > kSeamLimit || wrap.wrap_ratio_rows > kSeamLimit ? CaptureArea::Contact
+                                                                                     : CaptureArea::Whole;
+}
+
 ReliefMeasure measure_capture(const Image& normals, float mm_per_pixel, int window, CaptureArea area) {
     Image height = integrate_normal_map(normals, false, "capture");
     for (float& v : height.values()) v *= mm_per_pixel;
-    const Image region = area == CaptureArea::Contact ? texture_region(detail_slopes(normals).tilt) : Image();
+    const Image region = resolve_capture_area(normals, area) == CaptureArea::Contact
+                             ? texture_region(detail_slopes(normals).tilt)
+                             : Image();
     const int w = height.width(), h = height.height();
     if (window <= 0 || window >= std::min(w, h)) return measure_relief(height, mm_per_pixel, region);
     // Pad-sized windows on a grid over the capture: the high-pass and the form removal then see

@@ -175,6 +175,8 @@ Json tactile_roundtrip(const std::string& folder, const SceneAssets& assets, con
         j["name"] = part.name, j["capture_image"] = part.image, j["capture_preview"] = "touch/" + capture_png;
         j["touch_count"] = int(measures.size()), j["within_aim"] = within_aim(r);
         j["pitch_mm"] = part.pitch_mm;
+        j["capture_area"] =
+            resolve_capture_area(part.map.normals, CaptureArea::Auto) == CaptureArea::Contact ? "contact" : "whole";
         // How much finer (< 1) or coarser the scene lays this part's relief than it was captured.
         if (!part.name.empty()) j["relief_scale"] = part.pitch_mm / part.own_pitch_mm;
         per_part.push_back(j);

@@ -144,7 +144,7 @@ TEST(VirtualGelSight, CaptureIsComparedOverWhatTheAssetCarries) {
                 const double cx = std::fmod(x, 16.0) - 8.0, cy = std::fmod(y, 16.0) - 8.0;
                 height.at(x, y, 0) = float(3.0 * std::exp(-(cx * cx + cy * cy) / 8.0));
             }
-        return normals_from_height(height, 1.0f);
+        return normals_from_height(height, 1.0f, true);  // a tileable map
     };
     const Image sparse = bumps(true), dense = bumps(false);
     const ReliefMeasure sparse_whole = measure_capture(sparse, 0.1f, 32, CaptureArea::Whole);
@@ -156,4 +156,16 @@ TEST(VirtualGelSight, CaptureIsComparedOverWhatTheAssetCarries) {
     EXPECT_LT(sparse_whole.detail_tilt, 0.75 * sparse_contact.detail_tilt);
     EXPECT_NEAR(sparse_whole.detail_tilt / dense_whole.detail_tilt, 0.5, 0.1);  // half the map has bumps
     EXPECT_NEAR(dense_whole.detail_tilt / dense_contact.detail_tilt, 1.0, 0.1);
+    // A map that tiles is surface everywhere, so the round trip's Auto takes all of it; a crop
+    // that does not tile (a raw capture: bumps of a period that does not divide its width) is
+    // measured where it is textured.
+    EXPECT_EQ(resolve_capture_area(dense, CaptureArea::Auto), CaptureArea::Whole);
+    EXPECT_EQ(measure_capture(dense, 0.1f, 32).detail_tilt, dense_whole.detail_tilt);
+    Image crop_height(120, 120, 1);
+    for (int y = 0; y < 120; ++y)
+        for (int x = 0; x < 120; ++x) {
+            const double cx = std::fmod(x + 4.0, 16.0) - 8.0, cy = std::fmod(y + 4.0, 16.0) - 8.0;
+            crop_height.at(x, y, 0) = float(3.0 * std::exp(-(cx * cx + cy * cy) / 8.0));
+        }
+    EXPECT_EQ(resolve_capture_area(normals_from_height(crop_height, 1.0f), CaptureArea::Auto), CaptureArea::Contact);
 }

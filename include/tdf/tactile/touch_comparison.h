@@ -26,12 +26,17 @@ struct ReliefMeasure {
 ReliefMeasure measure_relief(const Image& height_mm, float mm_per_pixel, const Image& mask = Image());
 
 /// Which part of a capture a touch is compared with:
-/// - `Whole`: every pixel. What an asset carries when the map is its scene's tactile map (the
-///   optimizer lays the whole map over the atlas, flat stretches and all), so the round trip's
-///   comparison: a sparse relief (dimples on a flat) is compared with the same share of flat.
+/// - `Whole`: every pixel. A tileable map (made by `tdf tactile convert`, or a synthetic texture)
+///   is surface everywhere, and the optimizer lays all of it over the atlas, flat stretches and
+///   all: a sparse relief (dimples on a flat) is compared with the same share of flat.
 /// - `Contact`: the textured region (texture_region of its detail tilt), the contact region of a
-///   raw GelSight capture whose borders the sensor never touched.
-enum class CaptureArea { Whole, Contact };
+///   raw GelSight capture, whose borders the sensor never touched.
+/// - `Auto`: Contact for a map that does not tile (a raw capture crop: the step across its wrap
+///   above kSeamLimit times the steps next to it, normal_map_wrap_statistics), else Whole.
+enum class CaptureArea { Auto, Whole, Contact };
+
+/// The area `Auto` resolves to for `normals`.
+CaptureArea resolve_capture_area(const Image& normals, CaptureArea area);
 
 /// The input capture as a tactile normal map (decoded, 3+ channels) at `mm_per_pixel`: its
 /// heights (integrate_normal_map, mirrored) measured over `area`. With `window` > 0 and smaller
@@ -40,7 +45,7 @@ enum class CaptureArea { Whole, Contact };
 /// pad as the pad would have measured it (the form removal and the 12 px high-pass take more
 /// from a small window).
 ReliefMeasure measure_capture(const Image& normals, float mm_per_pixel, int window = 0,
-                              CaptureArea area = CaptureArea::Whole);
+                              CaptureArea area = CaptureArea::Auto);
 
 /// Simulated touches against the capture: the ratios of their mean detail tilt and mean height
 /// RMS to the capture's, and spectrum_distance = half the L1 distance of the mean scale energy
