@@ -256,6 +256,34 @@ Image heights_on_surface(const Image& texture_mm, float texture_mm_per_texel, co
     return out;
 }
 
+Image level_chart_offsets(const Image& texture_mm, const SurfaceTexels& surface) {
+    TDF_CHECK(texture_mm.channels() == 1 && texture_mm.width() == surface.size && texture_mm.height() == surface.size);
+    const int charts = surface.chart.empty() ? 0 : *std::max_element(surface.chart.begin(), surface.chart.end()) + 1;
+    // One unknown per chart: c_B - c_A should be h_a - h_b for every link (a in A, b in B).
+    std::vector<double> rhs(std::size_t(charts), 0.0), offset(std::size_t(charts), 0.0);
+    std::vector<std::pair<std::pair<int, int>, float>> weighted;
+    for (const auto& [a, b] : surface.seam_links) {
+        const int ca = surface.chart[std::size_t(a)], cb = surface.chart[std::size_t(b)];
+        if (ca == cb) continue;
+        const double wanted = double(texture_mm.data()[surface.texels[std::size_t(a)]]) -
+                              texture_mm.data()[surface.texels[std::size_t(b)]];
+        rhs[std::size_t(ca)] -= wanted, rhs[std::size_t(cb)] += wanted;
+        weighted.push_back({{ca, cb}, 1.0f});
+    }
+    const Graph graph = make_graph(std::size_t(charts), std::move(weighted));
+    conjugate_gradients(graph, rhs, offset, kCoarseIterations, kCoarseTolerance);
+    double mean = 0;
+    for (std::size_t i = 0; i < surface.covered_count(); ++i)
+        mean += texture_mm.data()[surface.texels[i]] + offset[std::size_t(surface.chart[i])];
+    mean = surface.covered_count() > 0 ? mean / double(surface.covered_count()) : 0.0;
+    Image out(surface.size, surface.size, 1);
+    for (std::size_t i = 0; i < surface.covered_count(); ++i)
+        out.data()[surface.texels[i]] =
+            float(texture_mm.data()[surface.texels[i]] + offset[std::size_t(surface.chart[i])] - mean);
+    dilate_gutter(out, surface.node, 0);
+    return out;
+}
+
 double surface_height_consistency(const Image& height_mm, const Image& normals, const SurfaceTexels& s,
                                   float mm_per_unit) {
     TDF_CHECK(height_mm.width() == s.size && height_mm.height() == s.size && normals.channels() >= 3);

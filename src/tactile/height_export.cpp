@@ -155,6 +155,7 @@ Json exported_height_json(const ExportedHeight& height, const ExportScale& scale
         j["texture_space_cosine"] = height.texture_space_cosine;
         j["surface_cosine"] = height.surface_cosine;
         j["seam_links"] = height.seam_links;
+        j["seam_levelling"] = height.seam_levelling;
     }
     if (scale.capture_mm_per_pixel > 0)
         j["capture"] = {{"mm_per_pixel", scale.capture_mm_per_pixel},

@@ -45,6 +45,14 @@ struct SurfaceHeightStats {
 Image heights_on_surface(const Image& texture_mm, float texture_mm_per_texel, const SurfaceTexels& surface,
                          float mm_per_unit, HeightMetric metric, SurfaceHeightStats* stats = nullptr);
 
+/// The heights of `texture_mm` with one constant added per UV chart, so that the texels linked
+/// across seams between two charts agree in least squares: the charts' relief is left exactly as
+/// it is (no ramps), but a seam whose two sides differ along its length keeps the difference, and
+/// a chart's seam with itself (a sphere's u = 0/1) is not touched. For atlases of many small
+/// charts whose textures do not continue across the seams, where heights_on_surface's levelling
+/// must bend each chart's relief into ramps. Zero mean over the covered texels; gutter filled.
+Image level_chart_offsets(const Image& texture_mm, const SurfaceTexels& surface);
+
 /// Mean cosine, over the covered texels, between `normals` and the normals recomputed from
 /// `height_mm` by central differences over each texel's surface step (one-sided where a
 /// neighbour is outside the texel's chart): the check of issue 24 at the texel's own size.

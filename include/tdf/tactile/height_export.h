@@ -42,6 +42,9 @@ struct ExportedHeight {
     double texture_space_cosine = -1, surface_cosine = -1;
     std::size_t seam_links = 0;
     std::string metric;
+    /// "full" (heights_on_surface) or "chart_offsets" (level_chart_offsets: where full levelling
+    /// would cost the normal map's consistency more than it gives); empty without a mesh.
+    std::string seam_levelling;
     /// Ambient occlusion of the heights (ambient_occlusion.h), written as `<base>_ao.png` when
     /// set; empty = none.
     Image occlusion;
