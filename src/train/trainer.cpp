@@ -320,7 +320,16 @@ void Trainer::swap_patch_and_view_buffers() {
 
 std::vector<float> Trainer::gradient() const {
     std::vector<float> all = m_gradient;
-    if (m_maps) all.insert(all.end(), m_residual_gradient.begin(), m_residual_gradient.end());
+    if (m_maps && m_residual_adam) {
+        all.insert(all.end(), m_residual_gradient.begin(), m_residual_gradient.end());
+    } else if (m_maps) {
+        // The Jacobi step keeps no residual gradient: it is derived from the folded map gradients,
+        // which hold it until update() smooths them.
+        TDF_CHECK(m_map_gradients_unstepped);
+        std::vector<float> residual;
+        m_maps->add_residual_gradient(m_batch->albedo_gradient.level0(), m_batch->normal_gradient.level0(), residual);
+        all.insert(all.end(), residual.begin(), residual.end());
+    }
     if (m_label_head) {
         all.insert(all.end(), m_label_gradient.begin(), m_label_gradient.end());
         all.resize(all.size() + m_label_head->parameters().size() - m_label_gradient.size(), 0.0f);

@@ -162,6 +162,8 @@ public:
     /// constants, as in step(). Texture evaluation: `i` must be past the matching phase.
     LossRecord loss_and_gradient(int i);
     /// The gradient from the last loss_and_gradient() (or step()), laid out like parameters().
+    /// With the Jacobi residual step (the default), only after loss_and_gradient(): step() has
+    /// consumed the map gradients the residual's is derived from.
     std::vector<float> gradient() const;
     /// Replaces every trained value (laid out like parameters()) and refreshes the maps.
     void set_parameters(const std::vector<float>& parameters);
@@ -276,7 +278,8 @@ private:
     MipTexture m_albedo_target_texture;
     MipTexture m_tactile_target_texture;
     std::unique_ptr<Adam> m_residual_adam;
-    std::vector<float> m_residual_gradient;
+    std::vector<float> m_residual_gradient;  // Adam's residual step only
+    bool m_map_gradients_unstepped = false;  // Batch's map gradients are backward()'s, not yet stepped on
     bool m_maps_ready = false;
     // Multi-part.
     std::unique_ptr<PartLabelHead> m_label_head;
