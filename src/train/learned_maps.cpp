@@ -56,8 +56,17 @@ void LearnedMaps::set_albedo_bounds(Image low, Image high) {
     m_albedo_high = std::move(high);
 }
 
+void LearnedMaps::release_training_state() {
+    m_residual = {};
+    m_field_outputs = {};
+    m_cache.clear();
+    m_albedo_low = Image();
+    m_albedo_high = Image();
+}
+
 void LearnedMaps::update() {
     const TexelAtlas& a = *m_atlas;
+    TDF_CHECK_EQ(m_residual.size(), a.covered_count() * kResidualPerTexel);
     const bool bounded = !m_albedo_low.empty();
     // Composed into the textures' own level 0 (one copy of each map), then their mips rebuilt.
     Image& albedo_level0 = m_albedo.base_level();

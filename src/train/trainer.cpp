@@ -139,6 +139,7 @@ AdamState Trainer::optimizer_state() const {
 
 // The field, then (texture evaluation) the residual, then (multi-part) the label head.
 CheckpointPieces Trainer::checkpoint_pieces() const {
+    TDF_CHECK(!m_training_finished);  // the residual is gone
     const AdamState& field = m_adam->state();
     CheckpointPieces pieces;
     pieces.parameters = {{m_field->parameters().data(), m_field->parameters().size()}};
@@ -225,7 +226,16 @@ Trainer::Phase Trainer::phase_of(int i) const {
 
 void Trainer::release_training_buffers() { m_batch = std::make_unique<Batch>(); }
 
+void Trainer::finish_training() {
+    release_training_buffers();
+    m_residual_adam.reset();
+    m_residual_gradient = {};
+    if (m_maps) m_maps->release_training_state();
+    m_training_finished = true;
+}
+
 LossRecord Trainer::step() {
+    TDF_CHECK(!m_training_finished);
     const int i = m_iteration;
     if (texture_space() && i < m_config.init_iterations) return fit_maps(i);
     const auto iteration_start = Clock::now();

@@ -42,6 +42,9 @@ public:
     /// input's local range widened by a tolerance). Empty images remove the bound. The bound must
     /// hold the current maps' targets (the matching phase's end stays exact).
     void set_albedo_bounds(Image low, Image high);
+    /// Frees what only update() and the optimizer read (the residual, the field's outputs, the
+    /// bounds) once training is over; albedo() and normal() stay, update() refuses.
+    void release_training_state();
 
     const MipTexture& albedo() const { return m_albedo; }
     const MipTexture& normal() const { return m_normal; }

@@ -156,6 +156,12 @@ public:
     /// Frees the per-iteration buffers (views, hits, map gradients) once training is over, so
     /// that exporting and evaluating do not add to their peak; the next step re-allocates them.
     void release_training_buffers();
+    /// Once the last iteration has run: frees the per-iteration buffers and what only further
+    /// iterations read (texture evaluation: the residual and its optimizer state, the field's
+    /// outputs at the texels, the colour bounds: 80 bytes a texel, 1.3 GB at 4096^2 maps). The
+    /// maps stay for export_maps(), evaluate_held_out() and the measures; step(), parameters()
+    /// and checkpoints refuse from then on.
+    void finish_training();
 
     /// Iteration `i`'s losses and their gradient with respect to parameters(), without changing
     /// anything (for finite-difference checks of the whole trainer). Guidance targets count as
@@ -281,6 +287,7 @@ private:
     std::vector<float> m_residual_gradient;  // Adam's residual step only
     bool m_map_gradients_unstepped = false;  // Batch's map gradients are backward()'s, not yet stepped on
     bool m_maps_ready = false;
+    bool m_training_finished = false;  // finish_training() ran
     // Multi-part.
     std::unique_ptr<PartLabelHead> m_label_head;
     std::unique_ptr<Adam> m_label_adam;
