@@ -1,7 +1,8 @@
 // Refinement's backward and update: the hits' gradients through the adjoint of the map lookups
 // into the map gradients, then to the residual and the field, and the optimizer step.
 // Reads: Batch::grads, curvature and lookups, the learned maps, the field cache.
-// Writes: Batch's map gradients, the field and residual gradients (checked finite), and after
+// Writes: Batch's map gradients, the field gradient and (Adam's residual step) the residual's,
+// all checked finite, and after
 // update() the field, the residual and the maps.
 #include "trainer_impl.h"
 
