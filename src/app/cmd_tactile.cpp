@@ -4,6 +4,7 @@
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
 #include <tdf/io/image_io.h>
+#include <tdf/tactile/ambient_occlusion.h>
 #include <tdf/tactile/height_export.h>
 #include <tdf/tactile/height_input.h>
 #include <tdf/tactile/material_statistics.h>
@@ -325,6 +326,7 @@ Json write_convert_height(const std::string& output, const HeightMap& map, const
     scale.periodic = map.tileable;
     scale.mm_per_texel = map.mm_per_pixel > 0 ? map.mm_per_pixel : 1.0f;  // else heights in pixel widths
     ExportedHeight height = export_height(decoded, scale, output);
+    height.occlusion = ambient_occlusion(height.map.height, scale.mm_per_texel, scale.periodic);
     height.map.pixel_heights = !(map.mm_per_pixel > 0);
     if (height.map.pixel_heights) height.map.mm_per_pixel = 0;
     const std::string base = (std::filesystem::path(output).parent_path() / std::filesystem::path(output).stem()).string();
@@ -332,7 +334,7 @@ Json write_convert_height(const std::string& output, const HeightMap& map, const
     Json j = exported_height_json(height, scale, std::filesystem::path(base + "_height.png").filename().string(),
                                   std::filesystem::path(base + "_height.exr").filename().string());
     if (height.map.pixel_heights) j["unit"] = "pixel";  // the capture's pixel size is unknown
-    log_info("wrote {}_height.exr and .png: {:.4g} .. {:.4g} {} (normals recomputed from it: mean cosine {:.5f})",
+    log_info("wrote {}_height.exr, .png and _ao.png: {:.4g} .. {:.4g} {} (normals recomputed from it: mean cosine {:.5f})",
              base, height.min_mm, height.max_mm, height.map.pixel_heights ? "pixel widths" : "mm", height.mean_cosine);
     if (height.mean_cosine < kHeightConsistencyLimit)
         log_warning("{}: the height map reproduces the normal map only to a mean cosine of {:.4f} (limit {})", output,

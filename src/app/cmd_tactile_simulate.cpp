@@ -25,7 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct SimulateArgs {
-    std::string folder, at, out, capture;
+    std::string folder, at, out, capture, capture_area = "whole";
     int points = 0, pad_pixels = 0;
     float pitch_mm = 0;
     std::uint64_t seed = 0;
@@ -108,7 +108,9 @@ int run_simulate(const SimulateArgs& a) {
     if (!a.capture.empty()) {
         const TactileMap capture = load_tactile_map(a.capture);
         const float pitch = capture.mm_per_pixel > 0 ? capture.mm_per_pixel : pad.mm_per_pixel;
-        const TouchRoundTrip r = compare_touches(measure_capture(capture.normals, pitch, std::min(pad.width, pad.height)), measures);
+        const CaptureArea area = a.capture_area == "contact" ? CaptureArea::Contact : CaptureArea::Whole;
+        const TouchRoundTrip r =
+            compare_touches(measure_capture(capture.normals, pitch, std::min(pad.width, pad.height), area), measures);
         summary["tactile_roundtrip"] = r.to_json();
         log_info("against {}: tilt ratio {:.3f}, height RMS ratio {:.3f}, spectrum distance {:.3f}", a.capture,
                  r.tilt_ratio, r.height_rms_ratio, r.spectrum_distance);
@@ -139,6 +141,11 @@ Command register_tactile_simulate(CLI::App& tactile) {
         ->capture_default_str();
     app->add_option("--capture", a->capture,
                     "input capture (tactile normal map) to compare with: tilt, height RMS and spectrum");
+    app->add_option("--capture-area", a->capture_area,
+                    "what of --capture to compare with: whole (all of it, as the asset carries a scene's map) or "
+                    "contact (its textured region, for a raw GelSight capture)")
+        ->check(CLI::IsMember({"whole", "contact"}))
+        ->capture_default_str();
     app->add_option("-o,--output", a->out, "output folder (default <asset_folder>/touch)");
     app->fallthrough();
     a->app = app;

@@ -396,7 +396,8 @@ Json glb_materials(const GlbMaps& maps, const FaceMaterials& parts, Json& textur
     Json pbr = {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}};
     Json material = {{"name", "material"}};
     for (const auto& [png, slot] : {std::make_pair(&maps.albedo_png, "baseColorTexture"),
-                                    std::make_pair(&maps.normal_png, "normalTexture")}) {
+                                    std::make_pair(&maps.normal_png, "normalTexture"),
+                                    std::make_pair(&maps.occlusion_png, "occlusionTexture")}) {
         if (png->empty()) continue;
         textures.push_back({{"source", add_image(*png, nullptr)}, {"sampler", 0}});
         const Json info = {{"index", textures.size() - 1}};

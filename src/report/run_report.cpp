@@ -128,8 +128,14 @@ std::string touch_section(const RunReport& r, const std::string& folder) {
     for (const char* key : {"mm_per_texel", "mm_per_unit", "min_mm", "max_mm", "mm_per_step", "normal_consistency_cosine",
                             "mm_per_texel_assumed"})
         row(r.height_map, key);
-    for (const char* key : {"tilt_ratio", "height_rms_ratio", "spectrum_distance", "within_aim"})
+    for (const char* key : {"texel_size", "seam_links", "texture_space_cosine", "surface_cosine"}) row(r.height_map, key);
+    for (const char* key : {"tilt_ratio", "height_rms_ratio", "spectrum_distance", "touch_count", "within_aim"})
         row(r.tactile_roundtrip, key);
+    for (const Json& part : r.tactile_roundtrip.value("parts", Json::array()))
+        html += fmt::format("<tr><td>part <code>{}</code>: tilt / height RMS ratio ({} touches)</td><td "
+                            "class=\"num\">{:.3f} / {:.3f}</td></tr>\n",
+                            html_escape(part.value("name", "")), part.value("touch_count", 0),
+                            part.value("tilt_ratio", 0.0), part.value("height_rms_ratio", 0.0));
     html += "</table>\n<p>Tilt and height RMS ratios: the virtual GelSight's touches over the input capture's "
             "contact region (aim [0.85, 1.15]); spectrum distance: half the L1 distance of their detail "
             "energy per octave (0 = the same).</p>\n<div class=\"figures\">\n";

@@ -3,6 +3,7 @@
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/io/image_io.h>
+#include <tdf/tactile/ambient_occlusion.h>
 #include <tdf/tactile/normal_map.h>
 #include <tdf/tactile/pipeline.h>
 
@@ -132,6 +133,7 @@ ExportedHeight export_height(const Image& normals, const ExportScale& scale, con
 void write_exported_height(const std::string& base, const ExportedHeight& height) {
     write_height_map(base + "_height.exr", height.map);
     write_height_preview_png(base + "_height.png", height.map);
+    if (!height.occlusion.empty()) write_png(base + "_ao.png", height.occlusion, 8, Quantize::Round);
 }
 
 Json exported_height_json(const ExportedHeight& height, const ExportScale& scale, const std::string& png_name,
@@ -144,6 +146,20 @@ Json exported_height_json(const ExportedHeight& height, const ExportScale& scale
               {"max_mm", height.max_mm},
               {"mm_per_step", height.mm_per_step()},
               {"normal_consistency_cosine", height.mean_cosine}};
+    if (!height.occlusion.empty()) {
+        double mean = 0;
+        for (float v : height.occlusion.values()) mean += v;
+        j["ambient_occlusion"] = {{"png", png_name.substr(0, png_name.size() - std::string("_height.png").size()) + "_ao.png"},
+                                  {"radius_texels", kAoRadiusTexels},
+                                  {"directions", kAoDirections},
+                                  {"mean_visibility", mean / double(height.occlusion.pixel_count())}};
+    }
+    if (!height.metric.empty()) {
+        j["texel_size"] = height.metric;  // "map": one size; "surface": each texel its own on the mesh
+        j["texture_space_cosine"] = height.texture_space_cosine;
+        j["surface_cosine"] = height.surface_cosine;
+        j["seam_links"] = height.seam_links;
+    }
     if (scale.capture_mm_per_pixel > 0)
         j["capture"] = {{"mm_per_pixel", scale.capture_mm_per_pixel},
                         {"width", scale.capture_width},

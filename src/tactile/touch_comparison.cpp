@@ -73,27 +73,31 @@ ReliefMeasure measure_relief(const Image& raw_height_mm, float mm_per_pixel, con
     return m;
 }
 
-ReliefMeasure measure_capture(const Image& normals, float mm_per_pixel, int window) {
+ReliefMeasure measure_capture(const Image& normals, float mm_per_pixel, int window, CaptureArea area) {
     Image height = integrate_normal_map(normals, false, "capture");
     for (float& v : height.values()) v *= mm_per_pixel;
-    const Image region = texture_region(detail_slopes(normals).tilt);
+    const Image region = area == CaptureArea::Contact ? texture_region(detail_slopes(normals).tilt) : Image();
     const int w = height.width(), h = height.height();
     if (window <= 0 || window >= std::min(w, h)) return measure_relief(height, mm_per_pixel, region);
-    // Pad-sized windows on a grid over the capture, those mostly in its contact region: the
-    // high-pass and the form removal then see what they see on a touch of that size.
+    // Pad-sized windows on a grid over the capture: the high-pass and the form removal then see
+    // what they see on a touch of that size.
     std::vector<ReliefMeasure> windows;
     for (int y0 = 0; y0 + window <= h; y0 += window)
         for (int x0 = 0; x0 + window <= w; x0 += window) {
-            Image crop(window, window, 1), crop_region(window, window, 1);
-            double inside = 0;
+            Image crop(window, window, 1), crop_region;
             for (int y = 0; y < window; ++y)
-                for (int x = 0; x < window; ++x) {
-                    crop.at(x, y, 0) = height.at(x0 + x, y0 + y, 0);
-                    crop_region.at(x, y, 0) = region.at(x0 + x, y0 + y, 0);
-                    inside += crop_region.at(x, y, 0) > 0 ? 1.0 : 0.0;
-                }
-            if (inside >= 0.5 * double(window) * double(window))
-                windows.push_back(measure_relief(crop, mm_per_pixel, crop_region));
+                for (int x = 0; x < window; ++x) crop.at(x, y, 0) = height.at(x0 + x, y0 + y, 0);
+            if (!region.empty()) {
+                crop_region = Image(window, window, 1);
+                double inside = 0;
+                for (int y = 0; y < window; ++y)
+                    for (int x = 0; x < window; ++x) {
+                        crop_region.at(x, y, 0) = region.at(x0 + x, y0 + y, 0);
+                        inside += crop_region.at(x, y, 0) > 0 ? 1.0 : 0.0;
+                    }
+                if (inside < 0.5 * double(window) * double(window)) continue;
+            }
+            windows.push_back(measure_relief(crop, mm_per_pixel, crop_region));
         }
     if (windows.empty()) return measure_relief(height, mm_per_pixel, region);
     return compare_touches(windows.front(), windows).touches;  // the windows' mean

@@ -10,6 +10,7 @@
 #include <tdf/render/texture.h>
 #include <tdf/scene/embree_scene.h>
 #include <tdf/tactile/material_statistics.h>
+#include <tdf/train/asset_height.h>
 
 #include <fmt/format.h>
 
@@ -34,15 +35,6 @@ Image decoded_png_normals(const Image& normals) {
     return quantized_normals(unit, 8);
 }
 
-/// The atlas's covered texels (1) when the raster has the map's size, else empty (all).
-Image covered_texels(const BakedMaps& maps) {
-    const int size = maps.raster.size;
-    if (size != maps.tactile_normal.width() || size != maps.tactile_normal.height()) return Image();
-    Image mask(size, size, 1);
-    for (std::size_t t = 0; t < maps.raster.triangle.size(); ++t) mask.data()[t] = maps.raster.triangle[t] >= 0 ? 1.0f : 0.0f;
-    return mask;
-}
-
 }  // namespace
 
 Json write_asset(const std::string& folder, const std::string& name, const std::string& postfix,
@@ -65,11 +57,13 @@ Json write_asset(const std::string& folder, const std::string& name, const std::
     material.albedo_map = stem + "_albedo.png";
     material.normal_map = stem + "_tactile_normal.png";
     Json height_json;
+    bool wrote_occlusion = false;
     if (height_scale && height_scale->mm_per_texel > 0) {
         const ExportedHeight height =
-            export_height(decoded_png_normals(maps.tactile_normal), *height_scale,
-                          stem + "_tactile_normal.png", covered_texels(maps));
+            export_surface_height(decoded_png_normals(maps.tactile_normal), *height_scale, mesh, maps.raster,
+                                  config.height_metric, stem + "_tactile_normal.png");
         write_exported_height(base, height);
+        wrote_occlusion = !height.occlusion.empty();
         height_json = exported_height_json(height, *height_scale, stem + "_height.png", stem + "_height.exr");
         if (height_scale->mm_per_unit > 0) material.height_map = stem + "_height.png";
         material.height_base = double(height.min_mm) / double(height_scale->mm_per_unit);
@@ -92,6 +86,7 @@ Json write_asset(const std::string& folder, const std::string& name, const std::
         if (!height_json.is_null()) {
             glb_maps.height_png = read_text_file(base + "_height.png");
             glb_maps.height_extras = height_json;
+            if (wrote_occlusion) glb_maps.occlusion_png = read_text_file(base + "_ao.png");
         }
         write_glb(base + ".glb", mesh, glb_maps, parts);
     }

@@ -1,10 +1,13 @@
 #include <tdf/train/asset_height.h>
 
+#include <tdf/atlas/surface_height.h>
 #include <tdf/core/log.h>
+#include <tdf/tactile/ambient_occlusion.h>
 #include <tdf/render/material_sampling.h>
 #include <tdf/tactile/height_map.h>
 #include <tdf/tactile/tactile_map.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace tdf {
@@ -30,6 +33,41 @@ ExportScale asset_export_scale(const SceneAssets& assets, const TriangleMesh& ex
                             ? config.mm_per_unit
                             : float(uv_mm / mesh_units_per_uv_unit(export_mesh));
     return scale;
+}
+
+ExportedHeight export_surface_height(const Image& normals, const ExportScale& scale, const TriangleMesh& mesh,
+                                     const UvRaster& raster, HeightMetric metric, const std::string& source) {
+    const bool map_sized = raster.size == normals.width() && raster.size == normals.height();
+    Image mask;
+    if (map_sized) {
+        mask = Image(raster.size, raster.size, 1);
+        for (std::size_t t = 0; t < raster.texel_count(); ++t) mask.data()[t] = raster.triangle[t] >= 0 ? 1.0f : 0.0f;
+    }
+    ExportedHeight out = export_height(normals, scale, source, mask);
+    if (!(scale.mm_per_unit > 0) || !mesh.has_uvs() || !map_sized || raster.covered_count() == 0) {
+        out.occlusion = ambient_occlusion(out.map.height, scale.mm_per_texel, false);
+        return out;
+    }
+    const SurfaceTexels surface = surface_texels(mesh, raster);
+    SurfaceHeightStats stats;
+    out.map.height = heights_on_surface(out.map.height, scale.mm_per_texel, surface, scale.mm_per_unit, metric, &stats);
+    const auto [lo, hi] = std::minmax_element(out.map.height.values().begin(), out.map.height.values().end());
+    out.min_mm = *lo, out.max_mm = *hi;
+    out.texture_space_cosine = height_normal_consistency(out.map.height, scale.mm_per_texel, normals, false, mask);
+    out.surface_cosine = surface_height_consistency(out.map.height, normals, surface, scale.mm_per_unit);
+    out.mean_cosine = metric == HeightMetric::Map ? out.texture_space_cosine : out.surface_cosine;
+    out.seam_links = surface.seam_links.size();
+    out.metric = metric == HeightMetric::Map ? "map" : "surface";
+    // Each chart shades only itself: the gutter and the neighbouring charts of the atlas are
+    // not the relief around a texel.
+    std::vector<int> chart(surface.node.size(), -1);
+    for (std::size_t i = 0; i < surface.covered_count(); ++i) chart[surface.texels[i]] = surface.chart[i];
+    out.occlusion = ambient_occlusion(out.map.height, scale.mm_per_texel, false, chart);
+    log_verbose("{}: heights levelled on the surface ({} texel size): {} texels, {} seam links, {} conjugate-gradient "
+                "iterations, relative residual {:.3g}",
+                source, out.metric, surface.covered_count(), surface.seam_links.size(), stats.iterations,
+                stats.relative_residual);
+    return out;
 }
 
 }  // namespace tdf

@@ -532,7 +532,8 @@ void export_final(Trainer& trainer, OptimizeRun& run, const ProgressReporter& pr
                    {"seed", run.description.seed},
                    {"threads", ThreadLimit::current()}};
     if (!height_json.is_null()) report["height_map"] = height_json;
-    if (const Json touch = tactile_roundtrip(run.options.output_dir, *run.assets, height_scale, run.description.seed);
+    if (const Json touch = tactile_roundtrip(run.options.output_dir, *run.assets, run.description.parts, height_scale,
+                                                   run.description.seed);
         !touch.is_null())
         report["tactile_roundtrip"] = touch;
     if (const Json texture = texture_space_quality(trainer, maps); !texture.is_null()) {

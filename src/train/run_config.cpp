@@ -158,6 +158,8 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.gutter = e.get("gutter", c.gutter);
     c.write_glb = e.get("glb", c.write_glb);
     c.write_exr = e.get("exr", c.write_exr);
+    c.height_metric = choose(e, "height_texel_size", c.height_metric,
+                             {{"map", HeightMetric::Map}, {"surface", HeightMetric::Surface}});
     c.turntable_views = e.get("turntable_views", c.turntable_views);
     c.turntable_resolution = e.get("turntable_resolution", c.turntable_resolution);
     e.check_all_read();
@@ -280,6 +282,7 @@ Json RunConfig::to_json() const {
                    {"gutter", gutter},
                    {"glb", write_glb},
                    {"exr", write_exr},
+                   {"height_texel_size", height_metric == HeightMetric::Map ? "map" : "surface"},
                    {"turntable_views", turntable_views},
                    {"turntable_resolution", turntable_resolution}};
     Json g = guidance_config;

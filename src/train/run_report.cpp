@@ -47,6 +47,30 @@ TurntableStage stage_frames(const std::string& folder, const std::string& subfol
     return stage;
 }
 
+// The round trip's pictures, side by side at one scale: each part's input capture, then the
+// touches that landed on it (tactile_roundtrip.h names the files).
+void add_touch_images(RunReport& r, const std::string& folder) {
+    const Json parts = r.tactile_roundtrip.value("parts", Json::array());
+    const Json touch_parts = r.tactile_roundtrip.value("touch_parts", Json::array());
+    if (parts.empty()) {
+        const std::string capture = folder + "/touch/capture_gelsight.png";
+        if (exists(capture)) r.touches.push_back({"input capture (the scene's tactile map)", capture});
+    }
+    for (const Json& part : parts) {
+        const std::string name = part.value("name", ""), capture = folder + "/" + part.value("capture_preview", "");
+        if (exists(capture)) r.touches.push_back({fmt::format("input capture of part {}", name), capture});
+        for (std::size_t k = 0; k < touch_parts.size(); ++k) {
+            const std::string touch = fmt::format("{}/touch/touch_{:03d}_gelsight.png", folder, k);
+            if (touch_parts[k] == name && exists(touch))
+                r.touches.push_back({fmt::format("virtual GelSight touch {} (part {})", k, name), touch});
+        }
+    }
+    if (!parts.empty()) return;
+    for (int k = 0; exists(fmt::format("{}/touch/touch_{:03d}_gelsight.png", folder, k)); ++k)
+        r.touches.push_back({fmt::format("virtual GelSight touch {} of the exported asset", k),
+                             fmt::format("{}/touch/touch_{:03d}_gelsight.png", folder, k)});
+}
+
 }  // namespace
 
 RunReport collect_run_report(const std::string& folder, const std::string& name,
@@ -68,7 +92,7 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
         if (!stage.frames.empty()) r.turntables.push_back(std::move(stage));
     }
     for (const char* postfix : {"", "_initialized"})
-        for (const char* map : {"_albedo.png", "_tactile_normal.png", "_height.png"}) {
+        for (const char* map : {"_albedo.png", "_tactile_normal.png", "_height.png", "_ao.png"}) {
             const std::string path = base + postfix + map;
             if (exists(path)) r.maps.push_back({fs::path(path).filename().string(), path});
         }
@@ -103,13 +127,7 @@ RunReport collect_run_report(const std::string& folder, const std::string& name,
                 (std::string(key) == "height_map" ? r.height_map : r.tactile_roundtrip) = report[key];
                 report.erase(key);
             }
-        if (!r.tactile_roundtrip.empty()) {
-            const std::string capture = folder + "/touch/capture_gelsight.png";
-            if (exists(capture)) r.touches.push_back({"input capture (the scene's tactile map)", capture});
-            for (int k = 0; exists(fmt::format("{}/touch/touch_{:03d}_gelsight.png", folder, k)); ++k)
-                r.touches.push_back({fmt::format("virtual GelSight touch {} of the exported asset", k),
-                                     fmt::format("{}/touch/touch_{:03d}_gelsight.png", folder, k)});
-        }
+        if (!r.tactile_roundtrip.empty()) add_touch_images(r, folder);
         if (report.contains("parts") && report["parts"].is_array()) r.parts = report["parts"];
         for (const char* key : {"quality", "parts", "part_segmentation"}) report.erase(key);
         r.timings = report;

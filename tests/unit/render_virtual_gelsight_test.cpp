@@ -4,6 +4,8 @@
 #include <tdf/core/error.h>
 #include <tdf/render/virtual_gelsight.h>
 #include <tdf/tactile/height_map.h>
+#include <tdf/tactile/normal_map.h>
+#include <tdf/tactile/touch_comparison.h>
 
 #include <cmath>
 #include <filesystem>
@@ -127,4 +129,31 @@ TEST(VirtualGelSight, RandomPointsAreSeededAndOnTheSurface) {
         EXPECT_NEAR(a[k].uv.x, a[k].position.x, 1e-5f);  // the plate's UV is its xy
         EXPECT_NEAR(a[k].uv.y, a[k].position.y, 1e-5f);
     }
+}
+
+// The round trip compares touches with the whole capture, as the asset carries the whole map:
+// a sparse relief (bumps on a flat) measured only where it is textured would look rougher than
+// random touches of the asset can ever feel. With bumps everywhere the two areas agree.
+TEST(VirtualGelSight, CaptureIsComparedOverWhatTheAssetCarries) {
+    const int size = 128;
+    const auto bumps = [&](bool left_half_only) {
+        Image height(size, size, 1);
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x) {
+                if (left_half_only && x >= size / 2) continue;
+                const double cx = std::fmod(x, 16.0) - 8.0, cy = std::fmod(y, 16.0) - 8.0;
+                height.at(x, y, 0) = float(3.0 * std::exp(-(cx * cx + cy * cy) / 8.0));
+            }
+        return normals_from_height(height, 1.0f);
+    };
+    const Image sparse = bumps(true), dense = bumps(false);
+    const ReliefMeasure sparse_whole = measure_capture(sparse, 0.1f, 32, CaptureArea::Whole);
+    const ReliefMeasure sparse_contact = measure_capture(sparse, 0.1f, 32, CaptureArea::Contact);
+    const ReliefMeasure dense_whole = measure_capture(dense, 0.1f, 32, CaptureArea::Whole);
+    const ReliefMeasure dense_contact = measure_capture(dense, 0.1f, 32, CaptureArea::Contact);
+    std::printf("detail tilt: sparse %.2f whole / %.2f contact, dense %.2f / %.2f deg\n", sparse_whole.detail_tilt,
+                sparse_contact.detail_tilt, dense_whole.detail_tilt, dense_contact.detail_tilt);
+    EXPECT_LT(sparse_whole.detail_tilt, 0.75 * sparse_contact.detail_tilt);
+    EXPECT_NEAR(sparse_whole.detail_tilt / dense_whole.detail_tilt, 0.5, 0.1);  // half the map has bumps
+    EXPECT_NEAR(dense_whole.detail_tilt / dense_contact.detail_tilt, 1.0, 0.1);
 }

@@ -1,5 +1,8 @@
 // End-to-end checks of `tdf optimize` on the shipped pebble sphere at a small size: quality after
 // the matching phase, determinism across thread counts, resume, exports and bad input.
+#include <tdf/atlas/surface_texels.h>
+#include <tdf/atlas/uv_raster.h>
+#include <tdf/tactile/height_export.h>
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/config.h>
 #include <tdf/core/error.h>
@@ -145,6 +148,33 @@ TEST(Optimize, ExportedHeightReproducesTheExportedNormalMap) {
     EXPECT_NEAR(report["height_map"]["mm_per_texel"].get<double>(), double(height.mm_per_pixel), 1e-6);
     const std::string glb = read_text_file(base + ".glb");
     EXPECT_NE(glb.find("\"tdf_height\""), std::string::npos);
+    // The relief's ambient occlusion beside it, in the GLB's occlusionTexture: the pebbles'
+    // grooves shade, the flat tops do not.
+    EXPECT_NE(glb.find("\"occlusionTexture\""), std::string::npos);
+    const Image ao = read_image(base + "_ao.png");
+    EXPECT_EQ(ao.width(), height.height.width());
+    const double visibility = report["height_map"]["ambient_occlusion"]["mean_visibility"].get<double>();
+    EXPECT_GT(visibility, 0.7);
+    EXPECT_LT(visibility, 0.99);
+    // The charts meet level: across the sphere's u = 0/1 seam the exported heights step by far
+    // less than the texture-space integration's (which knows nothing of the seam) do.
+    const TriangleMesh mesh = load_mesh(base + ".obj");
+    UvRaster raster = rasterize_uv(mesh, height.height.width());
+    add_partial_texels(mesh, raster);  // as the bake
+    const SurfaceTexels surface = surface_texels(mesh, raster);
+    ASSERT_GT(surface.seam_links.size(), 100u);
+    EXPECT_EQ(report["height_map"]["seam_links"].get<std::size_t>(), surface.seam_links.size());
+    Image texture_space = integrate_normal_map(normals, false);
+    for (float& v : texture_space.values()) v *= height.mm_per_pixel;
+    const auto mean_step = [&](const Image& h) {
+        double total = 0;
+        for (const auto& [a, b] : surface.seam_links)
+            total += std::abs(h.data()[surface.texels[std::size_t(a)]] - h.data()[surface.texels[std::size_t(b)]]);
+        return total / double(surface.seam_links.size());
+    };
+    std::printf("mean height step across the seam: %.4f mm exported, %.4f mm texture-space\n",
+                mean_step(height.height), mean_step(texture_space));
+    EXPECT_LT(mean_step(height.height), 0.25 * mean_step(texture_space));
 }
 
 TEST(Optimize, SameSeedSameFilesOnOneAndTwoThreads) {
@@ -348,4 +378,36 @@ TEST(Optimize, PromptObjectComesFromTheSceneKeyTheMeshFileOrItsNodes) {
     EXPECT_EQ(object_name_for_prompt(d, mesh), "old chair");
     d.object_name = "a ceramic mug";
     EXPECT_EQ(object_name_for_prompt(d, mesh), "a ceramic mug");
+}
+
+// Issue 24's round trip on a multi-part scene: every part is touched and compared with its own
+// capture, at the pitch its layout lays the capture's pixels on the asset. two_part_sphere's
+// export scale comes from its 128 px ribs map once over the atlas (10.88 mm per UV unit); the
+// cap lays the same map 3 times (a pixel 10.88 / 384 mm), the base the 256 px pebbles twice
+// (10.88 / 512 mm): relief scales 1/3 and 1/4 of GelSight Mini's 0.085 mm.
+TEST(Optimize, RoundTripTouchesEveryPartAgainstItsOwnCapture) {
+    OptimizeOptions options;
+    options.scene_path = test::source_dir() + "/scenes/two_part_sphere/scene.json";
+    options.overrides = small_run(4, 2);
+    options.output_dir = test::scratch_dir() + "/roundtrip_parts";
+    options.name = "two";
+    fs::remove_all(options.output_dir);
+    run_optimize(options);
+    const Json report = parse_json(read_text_file(options.output_dir + "/two_report.json"), "report");
+    ASSERT_TRUE(report.contains("tactile_roundtrip")) << report.dump();
+    const Json& trip = report["tactile_roundtrip"];
+    ASSERT_EQ(trip["parts"].size(), 2u);
+    const double expected_scale[] = {10.88 / 384.0 / 0.085, 10.88 / 512.0 / 0.085};
+    int touches = 0;
+    for (std::size_t k = 0; k < 2; ++k) {
+        const Json& part = trip["parts"][k];
+        EXPECT_EQ(part["name"], k == 0 ? "cap" : "base");
+        EXPECT_NEAR(part["relief_scale"].get<double>(), expected_scale[k], 0.01 * expected_scale[k]);
+        EXPECT_GT(part["touch_count"].get<int>(), 0);
+        EXPECT_TRUE(fs::exists(options.output_dir + "/" + part["capture_preview"].get<std::string>()));
+        touches += part["touch_count"].get<int>();
+    }
+    EXPECT_EQ(trip["touch_count"].get<int>(), touches);
+    ASSERT_EQ(trip["touch_parts"].size(), std::size_t(touches));
+    for (const Json& name : trip["touch_parts"]) EXPECT_TRUE(name == "cap" || name == "base");
 }

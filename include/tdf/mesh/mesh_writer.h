@@ -56,6 +56,8 @@ struct GlbMaps {
     /// its index, plus every key of `height_extras`). Empty = none.
     std::string height_png;
     Json height_extras = Json::object();
+    /// `occlusionTexture` (8-bit grey: glTF reads its R channel): the relief's ambient occlusion.
+    std::string occlusion_png;
 };
 
 /// The bytes of `image` as an 8-bit PNG file, from the same encoder (write_png) as PNG files.

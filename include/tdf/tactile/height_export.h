@@ -35,6 +35,16 @@ struct ExportedHeight {
     HeightMap map;              ///< heights in mm (map.mm_per_pixel = mm per texel), zero mean
     float min_mm = 0, max_mm = 0;
     double mean_cosine = 0;     ///< height_normal_consistency against the normals it came from
+    /// On a mesh (export_surface_height): the consistency at one texel size (mm_per_texel) and
+    /// at each texel's own size on the surface, the number of texel pairs held level across UV
+    /// seams, and the texel size the heights were integrated at ("map" or "surface"; mean_cosine
+    /// is that one's). Else -1, -1, 0 and empty.
+    double texture_space_cosine = -1, surface_cosine = -1;
+    std::size_t seam_links = 0;
+    std::string metric;
+    /// Ambient occlusion of the heights (ambient_occlusion.h), written as `<base>_ao.png` when
+    /// set; empty = none.
+    Image occlusion;
     bool assumed_pixel_size = false;  ///< mm per texel was not known: see ExportScale
     /// mm per step of the 16-bit PNG: (max - min) / 65535.
     double mm_per_step() const { return double(max_mm - min_mm) / 65535.0; }
@@ -59,13 +69,14 @@ ExportedHeight export_height(const Image& normals, const ExportScale& scale, con
 
 /// Writes `<base>_height.exr` (float, mm, tactile metadata) and `<base>_height.png` (16-bit,
 /// (h - min) / (max - min), with tdf:height_min_mm / tdf:height_max_mm so that `tdf tactile`
-/// reads it back in mm). Both atomically.
+/// reads it back in mm), and `<base>_ao.png` (8-bit) when height.occlusion is set. Atomically.
 void write_exported_height(const std::string& base, const ExportedHeight& height);
 
 /// The scale as JSON for reports, MTL comments and glTF extras: mm_per_texel, mm_per_unit,
 /// min_mm, max_mm, mm_per_step (16-bit), the file names (`png`, `exr`, given), the consistency
 /// cosine, and blender's displacement modifier settings (strength in mesh units per full PNG
-/// step, midlevel) when mm_per_unit is known.
+/// step, midlevel) when mm_per_unit is known; `ambient_occlusion` (the PNG's name, the march's
+/// radius and directions, the mean visibility) when height.occlusion is set.
 Json exported_height_json(const ExportedHeight& height, const ExportScale& scale, const std::string& png_name,
                           const std::string& exr_name);
 

@@ -25,14 +25,22 @@ struct ReliefMeasure {
 };
 ReliefMeasure measure_relief(const Image& height_mm, float mm_per_pixel, const Image& mask = Image());
 
-/// The input capture as a tactile normal map (decoded, 3+ channels, a GelSight crop that need
-/// not tile) at `mm_per_pixel`: its heights (integrate_normal_map, mirrored) measured over its
-/// textured region (texture_region of its detail tilt, the contact region of a capture). With
-/// `window` > 0 and smaller than the capture: the mean over window x window crops on a grid
-/// whose texels are at least half in that region, so that a capture compares with touches of a
-/// smaller pad as the pad would have measured it (the form removal and the 12 px high-pass take
-/// more from a small window).
-ReliefMeasure measure_capture(const Image& normals, float mm_per_pixel, int window = 0);
+/// Which part of a capture a touch is compared with:
+/// - `Whole`: every pixel. What an asset carries when the map is its scene's tactile map (the
+///   optimizer lays the whole map over the atlas, flat stretches and all), so the round trip's
+///   comparison: a sparse relief (dimples on a flat) is compared with the same share of flat.
+/// - `Contact`: the textured region (texture_region of its detail tilt), the contact region of a
+///   raw GelSight capture whose borders the sensor never touched.
+enum class CaptureArea { Whole, Contact };
+
+/// The input capture as a tactile normal map (decoded, 3+ channels) at `mm_per_pixel`: its
+/// heights (integrate_normal_map, mirrored) measured over `area`. With `window` > 0 and smaller
+/// than the capture: the mean over window x window crops on a grid (for Contact, those at least
+/// half in the region, measured over it), so that a capture compares with touches of a smaller
+/// pad as the pad would have measured it (the form removal and the 12 px high-pass take more
+/// from a small window).
+ReliefMeasure measure_capture(const Image& normals, float mm_per_pixel, int window = 0,
+                              CaptureArea area = CaptureArea::Whole);
 
 /// Simulated touches against the capture: the ratios of their mean detail tilt and mean height
 /// RMS to the capture's, and spectrum_distance = half the L1 distance of the mean scale energy

@@ -2,6 +2,7 @@
 /// Settings of `tdf optimize`, read from the scene file's "optimize", "tactile_layout" and
 /// "export" sections. Every default is the reference's value (spec 2.3, 2.4, 4.4, 5.1-5.5)
 /// unless its comment says otherwise; docs/scene-format.md lists them all.
+#include <tdf/atlas/surface_height.h>
 #include <tdf/core/config.h>
 
 #include <cstdint>
@@ -120,6 +121,9 @@ struct RunConfig {
     int gutter = 8;                 ///< texels of dilation across seams in the bakes
     bool write_glb = true;
     bool write_exr = true;
+    /// The texel size the exported height map's slopes are integrated over (export.height_texel_size:
+    /// "map" = the map's one size, seams levelled; "surface" = each texel's own on the mesh).
+    HeightMetric height_metric = HeightMetric::Map;
     int turntable_views = 8;        ///< PNG turntable renders of the result (0 = none)
     int turntable_resolution = 512;
 

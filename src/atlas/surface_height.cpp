@@ -1,0 +1,281 @@
+#include <tdf/atlas/surface_height.h>
+
+#include <tdf/atlas/gutter.h>
+#include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace tdf {
+
+namespace {
+
+constexpr std::size_t kChunk = 4096;  // fixed chunks: sums do not depend on the thread count
+constexpr int kAggregate = 8;         // texels per side of a coarse node
+constexpr int kCycles = 3;            // coarse correction + fine smoothing rounds
+constexpr int kFineIterations = 40;   // per round
+constexpr int kCoarseIterations = 2000;
+constexpr double kCoarseTolerance = 1e-6;
+
+/// A weighted graph Laplacian, (A x)_i = sum_j w_ij (x_i - x_j), in compressed rows.
+struct Graph {
+    std::vector<std::size_t> offset;  // n + 1
+    std::vector<int> neighbour;
+    std::vector<float> weight;
+    std::vector<double> diagonal;
+    std::size_t size() const { return diagonal.size(); }
+};
+
+/// Builds a graph from undirected edges (i, j, weight) with i != j, merged when repeated.
+Graph make_graph(std::size_t n, std::vector<std::pair<std::pair<int, int>, float>> edges) {
+    for (auto& e : edges)
+        if (e.first.first > e.first.second) std::swap(e.first.first, e.first.second);
+    std::sort(edges.begin(), edges.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<std::pair<std::pair<int, int>, float>> merged;
+    for (const auto& e : edges) {
+        if (!merged.empty() && merged.back().first == e.first) merged.back().second += e.second;
+        else merged.push_back(e);
+    }
+    Graph g;
+    g.offset.assign(n + 1, 0);
+    for (const auto& e : merged) ++g.offset[std::size_t(e.first.first) + 1], ++g.offset[std::size_t(e.first.second) + 1];
+    std::partial_sum(g.offset.begin(), g.offset.end(), g.offset.begin());
+    g.neighbour.resize(g.offset[n]);
+    g.weight.resize(g.offset[n]);
+    g.diagonal.assign(n, 0.0);
+    std::vector<std::size_t> fill(g.offset.begin(), g.offset.end() - 1);
+    for (const auto& e : merged) {
+        const auto [i, j] = e.first;
+        g.neighbour[fill[std::size_t(i)]] = j, g.weight[fill[std::size_t(i)]++] = e.second;
+        g.neighbour[fill[std::size_t(j)]] = i, g.weight[fill[std::size_t(j)]++] = e.second;
+        g.diagonal[std::size_t(i)] += e.second, g.diagonal[std::size_t(j)] += e.second;
+    }
+    return g;
+}
+
+void multiply(const Graph& g, const std::vector<double>& x, std::vector<double>& out) {
+    parallel_for(g.size(), kChunk, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            double s = g.diagonal[i] * x[i];
+            for (std::size_t k = g.offset[i]; k < g.offset[i + 1]; ++k)
+                s -= double(g.weight[k]) * x[std::size_t(g.neighbour[k])];
+            out[i] = s;
+        }
+    });
+}
+
+double dot(const std::vector<double>& a, const std::vector<double>& b) {
+    std::vector<double> partial(chunk_count(a.size(), kChunk), 0.0);
+    parallel_for(partial.size(), 1, [&](std::size_t c0, std::size_t c1) {
+        for (std::size_t c = c0; c < c1; ++c) {
+            double s = 0;
+            for (std::size_t i = c * kChunk; i < std::min(a.size(), (c + 1) * kChunk); ++i) s += a[i] * b[i];
+            partial[c] = s;
+        }
+    });
+    return std::accumulate(partial.begin(), partial.end(), 0.0);
+}
+
+/// Jacobi-preconditioned conjugate gradients on A x = b from x; stops after `iterations` or at
+/// |r| <= tolerance |b|. Returns the iterations run.
+int conjugate_gradients(const Graph& g, const std::vector<double>& b, std::vector<double>& x, int iterations,
+                        double tolerance) {
+    const std::size_t n = g.size();
+    std::vector<double> r(n), z(n), p(n), q(n);
+    multiply(g, x, q);
+    for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - q[i];
+    const double stop = tolerance * tolerance * dot(b, b);
+    const auto precondition = [&] {
+        for (std::size_t i = 0; i < n; ++i) z[i] = g.diagonal[i] > 0 ? r[i] / g.diagonal[i] : 0.0;
+    };
+    precondition();
+    p = z;
+    double rz = dot(r, z);
+    int k = 0;
+    for (; k < iterations && dot(r, r) > stop && rz > 0; ++k) {
+        multiply(g, p, q);
+        const double pq = dot(p, q);
+        if (!(pq > 0)) break;
+        const double alpha = rz / pq;
+        for (std::size_t i = 0; i < n; ++i) x[i] += alpha * p[i], r[i] -= alpha * q[i];
+        precondition();
+        const double rz_next = dot(r, z);
+        const double beta = rz_next / rz;
+        rz = rz_next;
+        for (std::size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+    }
+    return k;
+}
+
+/// Covered texel i's neighbour at (x + dx, y + dy) when it is covered and on i's chart, else -1.
+int chart_neighbour(const SurfaceTexels& s, std::size_t i, int dx, int dy) {
+    const int x = int(s.texels[i] % std::uint32_t(s.size)) + dx, y = int(s.texels[i] / std::uint32_t(s.size)) + dy;
+    if (x < 0 || y < 0 || x >= s.size || y >= s.size) return -1;
+    const int j = s.node[std::size_t(y) * std::size_t(s.size) + std::size_t(x)];
+    return j >= 0 && s.chart[std::size_t(j)] == s.chart[i] ? j : -1;
+}
+
+/// The change of `height` (the map, indexed by texel) per texel step along (dx, dy) at covered
+/// texel i: central where both neighbours are on its chart, else one-sided, else 0.
+double chart_difference(const SurfaceTexels& s, const float* height, std::size_t i, int dx, int dy) {
+    const int lo = chart_neighbour(s, i, -dx, -dy), hi = chart_neighbour(s, i, dx, dy);
+    const auto at = [&](int j) { return double(height[s.texels[std::size_t(j)]]); };
+    if (lo >= 0 && hi >= 0) return 0.5 * (at(hi) - at(lo));
+    if (hi >= 0) return at(hi) - at(int(i));
+    if (lo >= 0) return at(int(i)) - at(lo);
+    return 0.0;
+}
+
+/// The normal equations of the texel graph: A (unit weights) and b_i = -sum_j g_ij, g_ij the
+/// wanted h_j - h_i in mm.
+struct Problem {
+    Graph fine;
+    std::vector<double> rhs;
+    std::vector<std::pair<int, int>> edges;  // for the coarse graph
+};
+
+Problem texel_problem(const Image& texture_mm, float texture_mm_per_texel, const SurfaceTexels& s, float mm_per_unit,
+                      HeightMetric metric) {
+    const std::size_t n = s.covered_count();
+    const auto height = [&](int j) { return double(texture_mm.data()[s.texels[std::size_t(j)]]); };
+    // The texture-space heights' slope along T at each texel.
+    std::vector<double> slope_t(n, 0.0);
+    parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
+            slope_t[i] = chart_difference(s, texture_mm.data(), i, 1, 0) / double(texture_mm_per_texel);
+    });
+    Problem problem;
+    problem.rhs.assign(n, 0.0);
+    std::vector<std::pair<std::pair<int, int>, float>> weighted;
+    const auto link = [&](int i, int j, double wanted) {
+        problem.rhs[std::size_t(i)] -= wanted;
+        problem.rhs[std::size_t(j)] += wanted;
+        problem.edges.emplace_back(i, j);
+        weighted.push_back({{i, j}, 1.0f});
+    };
+    // Each edge keeps the texture-space heights' own difference (so their fine structure, which
+    // matches the normal map's central differences, stays), turned into the slopes it stands
+    // for and taken over the surface step between the two texels.
+    const double m = mm_per_unit, inv = 1.0 / double(texture_mm_per_texel);
+    for (std::size_t i = 0; i < n; ++i) {
+        const TexelStep& a = s.step[i];
+        if (metric == HeightMetric::Map) {  // the texture-space differences as they are
+            if (const int j = chart_neighbour(s, i, 1, 0); j >= 0) link(int(i), j, height(j) - height(int(i)));
+            if (const int j = chart_neighbour(s, i, 0, 1); j >= 0) link(int(i), j, height(j) - height(int(i)));
+            continue;
+        }
+        if (const int j = chart_neighbour(s, i, 1, 0); j >= 0) {
+            const double along_t = (height(j) - height(int(i))) * inv;
+            link(int(i), j, m * 0.5 * (double(a.along_x_t) + s.step[std::size_t(j)].along_x_t) * along_t);
+        }
+        if (const int j = chart_neighbour(s, i, 0, 1); j >= 0) {
+            const TexelStep& b = s.step[std::size_t(j)];
+            const double along_b = -(height(j) - height(int(i))) * inv;  // a row down is -v
+            const double along_t = 0.5 * (slope_t[i] + slope_t[std::size_t(j)]);
+            link(int(i), j, m * (0.5 * (double(a.along_y_t) + b.along_y_t) * along_t +
+                                 0.5 * (double(a.along_y_b) + b.along_y_b) * along_b));
+        }
+    }
+    for (const auto& [i, j] : s.seam_links) link(i, j, 0.0);  // level across the seam
+    problem.fine = make_graph(n, std::move(weighted));
+    return problem;
+}
+
+/// Galerkin coarse graph over kAggregate^2-texel blocks of one chart: weights count the fine
+/// edges between two blocks.
+struct Coarse {
+    std::vector<int> of;  // per fine node
+    Graph graph;
+};
+
+Coarse coarse_graph(const SurfaceTexels& s, const std::vector<std::pair<int, int>>& fine_edges) {
+    Coarse c;
+    const std::size_t n = s.covered_count();
+    std::vector<std::pair<std::uint64_t, int>> keys(n);
+    const std::uint64_t blocks = std::uint64_t(s.size / kAggregate + 1);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint64_t x = s.texels[i] % std::uint32_t(s.size) / kAggregate, y = s.texels[i] / std::uint32_t(s.size) / kAggregate;
+        keys[i] = {(std::uint64_t(s.chart[i]) * blocks + y) * blocks + x, int(i)};
+    }
+    std::sort(keys.begin(), keys.end());
+    c.of.assign(n, -1);
+    int count = -1;
+    for (std::size_t k = 0; k < n; ++k) {
+        if (k == 0 || keys[k].first != keys[k - 1].first) ++count;
+        c.of[std::size_t(keys[k].second)] = count;
+    }
+    std::vector<std::pair<std::pair<int, int>, float>> weighted;
+    for (const auto& [i, j] : fine_edges) {
+        const int a = c.of[std::size_t(i)], b = c.of[std::size_t(j)];
+        if (a != b) weighted.push_back({{a, b}, 1.0f});
+    }
+    c.graph = make_graph(std::size_t(count + 1), std::move(weighted));
+    return c;
+}
+
+/// h += the coarse solution of A_c e = R (b - A h), prolonged piecewise constant.
+void coarse_correction(const Problem& p, const Coarse& c, std::vector<double>& h) {
+    std::vector<double> r(h.size());
+    multiply(p.fine, h, r);
+    std::vector<double> rc(c.graph.size(), 0.0), e(c.graph.size(), 0.0);
+    for (std::size_t i = 0; i < h.size(); ++i) rc[std::size_t(c.of[i])] += p.rhs[i] - r[i];
+    conjugate_gradients(c.graph, rc, e, kCoarseIterations, kCoarseTolerance);
+    for (std::size_t i = 0; i < h.size(); ++i) h[i] += e[std::size_t(c.of[i])];
+}
+
+}  // namespace
+
+Image heights_on_surface(const Image& texture_mm, float texture_mm_per_texel, const SurfaceTexels& surface,
+                         float mm_per_unit, HeightMetric metric, SurfaceHeightStats* stats) {
+    TDF_CHECK(texture_mm.channels() == 1 && texture_mm.width() == surface.size && texture_mm.height() == surface.size);
+    TDF_CHECK(mm_per_unit > 0 && texture_mm_per_texel > 0);
+    const Problem problem = texel_problem(texture_mm, texture_mm_per_texel, surface, mm_per_unit, metric);
+    const Coarse coarse = coarse_graph(surface, problem.edges);
+    std::vector<double> h(surface.covered_count());
+    for (std::size_t i = 0; i < h.size(); ++i) h[i] = texture_mm.data()[surface.texels[i]];
+    int iterations = 0;
+    for (int cycle = 0; cycle < kCycles; ++cycle) {
+        coarse_correction(problem, coarse, h);
+        iterations += conjugate_gradients(problem.fine, problem.rhs, h, kFineIterations, 0.0);
+    }
+    // Zero mean over the covered texels, as the texture-space integration.
+    const double mean = h.empty() ? 0.0 : std::accumulate(h.begin(), h.end(), 0.0) / double(h.size());
+    Image out(surface.size, surface.size, 1);
+    for (std::size_t i = 0; i < h.size(); ++i) out.data()[surface.texels[i]] = float(h[i] - mean);
+    dilate_gutter(out, surface.node, 0);
+    if (stats) {
+        std::vector<double> r(h.size());
+        multiply(problem.fine, h, r);
+        for (std::size_t i = 0; i < h.size(); ++i) r[i] = problem.rhs[i] - r[i];
+        const double b = dot(problem.rhs, problem.rhs);
+        stats->iterations = iterations;
+        stats->relative_residual = b > 0 ? std::sqrt(dot(r, r) / b) : 0.0;
+    }
+    return out;
+}
+
+double surface_height_consistency(const Image& height_mm, const Image& normals, const SurfaceTexels& s,
+                                  float mm_per_unit) {
+    TDF_CHECK(height_mm.width() == s.size && height_mm.height() == s.size && normals.channels() >= 3);
+    TDF_CHECK(mm_per_unit > 0);
+    const std::size_t n = s.covered_count();
+    std::vector<double> cosine(n, 0.0);
+    parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const auto difference = [&](int dx, int dy) { return chart_difference(s, height_mm.data(), i, dx, dy); };
+            const TexelStep& d = s.step[i];
+            // Invert gx = m st ax, gy = m (st ayt + sb ayb) for the slopes along T and B.
+            const double st = difference(1, 0) / (double(mm_per_unit) * d.along_x_t);
+            const double sb = (difference(0, 1) / double(mm_per_unit) - st * d.along_y_t) / d.along_y_b;
+            const double length = std::sqrt(st * st + sb * sb + 1.0);
+            const float* m = normals.data() + std::size_t(s.texels[i]) * std::size_t(normals.channels());
+            const double m_length = std::sqrt(double(m[0]) * m[0] + double(m[1]) * m[1] + double(m[2]) * m[2]);
+            if (m_length > 0) cosine[i] = (-st * m[0] - sb * m[1] + m[2]) / (length * m_length);
+        }
+    });
+    return n > 0 ? std::accumulate(cosine.begin(), cosine.end(), 0.0) / double(n) : 0.0;
+}
+
+}  // namespace tdf
