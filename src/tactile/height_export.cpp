@@ -37,26 +37,28 @@ Image integrate_normal_map(const Image& normals, bool periodic, const std::strin
     // with y the row index, so Dx h = -nx / nz and Dy h = ny / nz (central differences).
     const int W = periodic ? w : 2 * w, H = periodic ? h : 2 * h;
     const std::size_t n = std::size_t(W) * std::size_t(H), nc = std::size_t(H) * std::size_t(W / 2 + 1);
-    fftw::RealBuffer dx = fftw::alloc_real(n), dy = fftw::alloc_real(n);
-    parallel_for(std::size_t(H), 16, [&](std::size_t y0, std::size_t y1) {
-        for (int Y = int(y0); Y < int(y1); ++Y)
-            for (int X = 0; X < W; ++X) {
-                float sx = 1.0f, sy = 1.0f;  // odd in their own direction, even across it
-                const int x = mirrored(X, w, sx), y = mirrored(Y, h, sy);
-                const float* p = normals.pixel(x, y);
-                const float nz = std::max(p[2], 0.1f);
-                const std::size_t i = std::size_t(Y) * std::size_t(W) + std::size_t(X);
-                dx[i] = double(sx) * double(-p[0] / nz);
-                dy[i] = double(sy) * double(p[1] / nz);
-            }
-    });
-    fftw::ComplexBuffer fx = fftw::alloc_complex(nc), fy = fftw::alloc_complex(nc);
-    {
-        const fftw::Plan px = fftw::plan_r2c(W, H, dx.get(), fx.get());
-        fftw_execute(px.get());
-        const fftw::Plan py = fftw::plan_r2c(W, H, dy.get(), fy.get());
-        fftw_execute(py.get());
-    }
+    // One difference at a time, its real array freed once transformed: three of the four
+    // (mirrored: 4 values a texel) arrays live at once, not four (a 4096^2 map: 1.6 GB, not 2.1).
+    const auto transformed_difference = [&](bool along_x) {
+        fftw::RealBuffer d = fftw::alloc_real(n);
+        parallel_for(std::size_t(H), 16, [&](std::size_t y0, std::size_t y1) {
+            for (int Y = int(y0); Y < int(y1); ++Y)
+                for (int X = 0; X < W; ++X) {
+                    float sx = 1.0f, sy = 1.0f;  // odd in their own direction, even across it
+                    const int x = mirrored(X, w, sx), y = mirrored(Y, h, sy);
+                    const float* p = normals.pixel(x, y);
+                    const float nz = std::max(p[2], 0.1f);
+                    d[std::size_t(Y) * std::size_t(W) + std::size_t(X)] =
+                        along_x ? double(sx) * double(-p[0] / nz) : double(sy) * double(p[1] / nz);
+                }
+        });
+        fftw::ComplexBuffer f = fftw::alloc_complex(nc);
+        const fftw::Plan plan = fftw::plan_r2c(W, H, d.get(), f.get());
+        fftw_execute(plan.get());
+        return f;
+    };
+    const fftw::ComplexBuffer fx = transformed_difference(true);
+    fftw::ComplexBuffer fy = transformed_difference(false);
     // H = (conj(Dx) Fx + conj(Dy) Fy) / (|Dx|^2 + |Dy|^2) with Dx = i sin(2 pi u / W): the
     // least-squares heights for central differences; zero where they see nothing.
     const int half = W / 2 + 1;
@@ -75,6 +77,8 @@ Image integrate_normal_map(const Image& normals, bool periodic, const std::strin
             }
         }
     });
+    fy.reset();
+    const fftw::RealBuffer dx = fftw::alloc_real(n);  // the heights
     {
         const fftw::Plan inverse = fftw::plan_c2r(W, H, fx.get(), dx.get());
         fftw_execute(inverse.get());

@@ -5,6 +5,8 @@
 #include <tdf/core/parallel.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 
 namespace tdf {
 
@@ -54,8 +56,17 @@ void LearnedMaps::set_albedo_bounds(Image low, Image high) {
     m_albedo_high = std::move(high);
 }
 
+void LearnedMaps::release_training_state() {
+    m_residual = {};
+    m_field_outputs = {};
+    m_cache.clear();
+    m_albedo_low = Image();
+    m_albedo_high = Image();
+}
+
 void LearnedMaps::update() {
     const TexelAtlas& a = *m_atlas;
+    TDF_CHECK_EQ(m_residual.size(), a.covered_count() * kResidualPerTexel);
     const bool bounded = !m_albedo_low.empty();
     // Composed into the textures' own level 0 (one copy of each map), then their mips rebuilt.
     Image& albedo_level0 = m_albedo.base_level();
@@ -104,15 +115,41 @@ namespace {
 const std::vector<float> kStepTent = {0.25f, 0.5f, 0.25f};
 }  // namespace
 
-void LearnedMaps::backward(Image& d_albedo, Image& d_normal, std::vector<float>& d_residual,
+bool LearnedMaps::backward(Image& d_albedo, Image& d_normal, std::vector<float>* d_residual,
                            std::vector<FieldOutputGrads>* d_field) const {
     const TexelAtlas& a = *m_atlas;
     TDF_CHECK(d_albedo.channels() >= 3 && d_normal.channels() >= 3);
     a.fold_gutter_gradient(d_albedo);
     a.fold_gutter_gradient(d_normal);
+    if (d_residual) add_residual_gradient(d_albedo, d_normal, *d_residual);
+    if (d_field) d_field->assign(a.covered_count(), FieldOutputGrads{});
+    const std::size_t ca = std::size_t(d_albedo.channels()), cn = std::size_t(d_normal.channels());
+    // dL/d(residual) of a texel is its map gradient (r enters the map with weight 1): finite
+    // exactly when channels 0-2 of both maps are, at every covered texel.
+    std::atomic<bool> finite{true};
+    parallel_for(a.covered_count(), kTexelGrain, [&](std::size_t begin, std::size_t end) {
+        bool chunk_finite = true;
+        for (std::size_t k = begin; k < end; ++k) {
+            const std::size_t t = a.texels[k];
+            const float* ga = d_albedo.data() + ca * t;
+            const float* gn = d_normal.data() + cn * t;
+            for (int c = 0; c < 3; ++c) chunk_finite = chunk_finite && std::isfinite(ga[c]) && std::isfinite(gn[c]);
+            if (d_field) {
+                FieldOutputGrads& g = (*d_field)[k];
+                g.d_albedo = {ga[0], ga[1], ga[2]};
+                g.d_normal = {gn[0], gn[1], gn[2]};
+            }
+        }
+        if (!chunk_finite) finite = false;
+    });
+    return finite;
+}
+
+void LearnedMaps::add_residual_gradient(const Image& d_albedo, const Image& d_normal,
+                                        std::vector<float>& d_residual) const {
+    const TexelAtlas& a = *m_atlas;
     if (d_residual.empty()) d_residual.assign(m_residual.size(), 0.0f);
     TDF_CHECK_EQ(d_residual.size(), m_residual.size());
-    if (d_field) d_field->assign(a.covered_count(), FieldOutputGrads{});
     const std::size_t ca = std::size_t(d_albedo.channels()), cn = std::size_t(d_normal.channels());
     parallel_for(a.covered_count(), kTexelGrain, [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
@@ -123,11 +160,6 @@ void LearnedMaps::backward(Image& d_albedo, Image& d_normal, std::vector<float>&
             for (int c = 0; c < 3; ++c) {
                 dr[c] += ga[c];
                 dr[3 + c] += gn[c];
-            }
-            if (d_field) {
-                FieldOutputGrads& g = (*d_field)[k];
-                g.d_albedo = {ga[0], ga[1], ga[2]};
-                g.d_normal = {gn[0], gn[1], gn[2]};
             }
         }
     });
@@ -143,13 +175,8 @@ void LearnedMaps::jacobi_step(Image& d_albedo, const Image& d_normal, float step
     // curvature alike, so the step stays the coverage-weighted mean of what nearby pixels ask.
     // The normal map is left alone: tactile patches read it near level 0, and per-part gating
     // (docs/multi-part-textures.md) must not reach across a part's boundary.
-    for (int pass = 0; pass < smoothing; ++pass) {
-        if (m_step_scratch.width() != d_albedo.width() || m_step_scratch.height() != d_albedo.height() ||
-            m_step_scratch.channels() != d_albedo.channels())
-            m_step_scratch = Image(d_albedo.width(), d_albedo.height(), d_albedo.channels());
-        convolve_separable(d_albedo, m_step_scratch, kStepTent, Addressing::Border);
-        std::swap(d_albedo, m_step_scratch);
-    }
+    // In place (convolve_separable allows it): no second 4-channel image, 16 bytes a texel.
+    for (int pass = 0; pass < smoothing; ++pass) convolve_separable(d_albedo, d_albedo, kStepTent, Addressing::Border);
     // Damping: a texel seen by a tenth of the typical hit moves by at most about a tenth as much.
     const auto damping = [&](const Image& d) {
         double sum = 0;

@@ -515,7 +515,7 @@ Json part_report(const Trainer& trainer, OptimizeRun& run, const BakedMaps& maps
 void export_final(Trainer& trainer, OptimizeRun& run, const ProgressReporter& progress,
                   const TriangleMesh& export_mesh) {
     const RunConfig& config = run.config;
-    trainer.release_training_buffers();
+    trainer.finish_training();
     const BakedMaps maps = trainer.export_maps();
     const ExportScale height_scale = asset_export_scale(*run.assets, export_mesh, config);  // issue 24
     const Json height_json =

@@ -139,6 +139,7 @@ AdamState Trainer::optimizer_state() const {
 
 // The field, then (texture evaluation) the residual, then (multi-part) the label head.
 CheckpointPieces Trainer::checkpoint_pieces() const {
+    TDF_CHECK(!m_training_finished);  // the residual is gone
     const AdamState& field = m_adam->state();
     CheckpointPieces pieces;
     pieces.parameters = {{m_field->parameters().data(), m_field->parameters().size()}};
@@ -225,7 +226,16 @@ Trainer::Phase Trainer::phase_of(int i) const {
 
 void Trainer::release_training_buffers() { m_batch = std::make_unique<Batch>(); }
 
+void Trainer::finish_training() {
+    release_training_buffers();
+    m_residual_adam.reset();
+    m_residual_gradient = {};
+    if (m_maps) m_maps->release_training_state();
+    m_training_finished = true;
+}
+
 LossRecord Trainer::step() {
+    TDF_CHECK(!m_training_finished);
     const int i = m_iteration;
     if (texture_space() && i < m_config.init_iterations) return fit_maps(i);
     const auto iteration_start = Clock::now();
@@ -320,7 +330,16 @@ void Trainer::swap_patch_and_view_buffers() {
 
 std::vector<float> Trainer::gradient() const {
     std::vector<float> all = m_gradient;
-    if (m_maps) all.insert(all.end(), m_residual_gradient.begin(), m_residual_gradient.end());
+    if (m_maps && m_residual_adam) {
+        all.insert(all.end(), m_residual_gradient.begin(), m_residual_gradient.end());
+    } else if (m_maps) {
+        // The Jacobi step keeps no residual gradient: it is derived from the folded map gradients,
+        // which hold it until update() smooths them.
+        TDF_CHECK(m_map_gradients_unstepped);
+        std::vector<float> residual;
+        m_maps->add_residual_gradient(m_batch->albedo_gradient.level0(), m_batch->normal_gradient.level0(), residual);
+        all.insert(all.end(), residual.begin(), residual.end());
+    }
     if (m_label_head) {
         all.insert(all.end(), m_label_gradient.begin(), m_label_gradient.end());
         all.resize(all.size() + m_label_head->parameters().size() - m_label_gradient.size(), 0.0f);

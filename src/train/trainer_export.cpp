@@ -23,7 +23,9 @@ BakedMaps Trainer::export_maps() const {
     BakedMaps maps;
     maps.albedo = m_maps->export_albedo();
     maps.tactile_normal = m_maps->export_normal();
-    maps.raster = m_atlas->raster;
+    // Export reads only which texels are covered: the barycentrics (12 bytes a texel) stay behind.
+    maps.raster.size = m_atlas->raster.size;
+    maps.raster.triangle = m_atlas->raster.triangle;
     return maps;
 }
 

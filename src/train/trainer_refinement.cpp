@@ -1,7 +1,8 @@
 // Refinement's backward and update: the hits' gradients through the adjoint of the map lookups
 // into the map gradients, then to the residual and the field, and the optimizer step.
 // Reads: Batch::grads, curvature and lookups, the learned maps, the field cache.
-// Writes: Batch's map gradients, the field and residual gradients (checked finite), and after
+// Writes: Batch's map gradients, the field gradient and (Adam's residual step) the residual's,
+// all checked finite, and after
 // update() the field, the residual and the maps.
 #include "trainer_impl.h"
 
@@ -80,12 +81,15 @@ void Trainer::backward(int i) {
     // The hits were scattered into the map gradients view by view (scatter_map_gradients).
     b.albedo_gradient.collapse();
     b.normal_gradient.collapse();
-    m_residual_gradient.assign(m_maps->residual().size(), 0.0f);
-    m_maps->backward(b.albedo_gradient.level0(), b.normal_gradient.level0(), m_residual_gradient,
-                     m_config.refine_grid ? &b.texel_grads : nullptr);
+    // Only Adam steps along the residual's gradient; the Jacobi step reads the map gradients
+    // (gradient() derives the residual's from them on request).
+    if (m_residual_adam) m_residual_gradient.assign(m_maps->residual().size(), 0.0f);
+    const bool finite = m_maps->backward(b.albedo_gradient.level0(), b.normal_gradient.level0(),
+                                         m_residual_adam ? &m_residual_gradient : nullptr,
+                                         m_config.refine_grid ? &b.texel_grads : nullptr);
+    m_map_gradients_unstepped = true;
     if (m_config.refine_grid) m_maps->field_backward(*m_field, b.texel_grads, m_gradient);
-    for (float g : m_residual_gradient)
-        if (!std::isfinite(g)) throw_error("iteration {}: the map gradient is not finite; the maps were not updated", i);
+    if (!finite) throw_error("iteration {}: the map gradient is not finite; the maps were not updated", i);
     for (float g : m_gradient)
         if (!std::isfinite(g)) throw_error("iteration {}: the field gradient is not finite; the field was not updated", i);
 }
@@ -97,6 +101,7 @@ void Trainer::update(int i) {
         return;
     }
     (void)i;
+    m_map_gradients_unstepped = false;  // the Jacobi step smooths the albedo's gradient in place
     if (m_config.residual_optimizer == "jacobi")
         m_maps->jacobi_step(m_batch->albedo_gradient.level0(), m_batch->normal_gradient.level0(), m_config.residual_step,
                             m_config.residual_step_smoothing);

@@ -42,6 +42,9 @@ public:
     /// input's local range widened by a tolerance). Empty images remove the bound. The bound must
     /// hold the current maps' targets (the matching phase's end stays exact).
     void set_albedo_bounds(Image low, Image high);
+    /// Frees what only update() and the optimizer read (the residual, the field's outputs, the
+    /// bounds) once training is over; albedo() and normal() stay, update() refuses.
+    void release_training_state();
 
     const MipTexture& albedo() const { return m_albedo; }
     const MipTexture& normal() const { return m_normal; }
@@ -50,11 +53,15 @@ public:
     Image export_normal() const;
 
     /// From dL/d(level-0 maps) (size x size, channels 0-2 used; the gutter's share is folded back
-    /// into its source texels, so the images are modified): adds dL/d(residual) to `d_residual` (resized
-    /// to residual().size() when empty) and, when `d_field` is given, the per-texel upstream
-    /// gradients of the field outputs (albedo, normal) in atlas texel order.
-    void backward(Image& d_albedo, Image& d_normal, std::vector<float>& d_residual,
+    /// into its source texels, so the images are modified): adds dL/d(residual) to `*d_residual`
+    /// when given (resized to residual().size() when empty) and, when `d_field` is given, the
+    /// per-texel upstream gradients of the field outputs (albedo, normal) in atlas texel order.
+    /// Returns whether dL/d(residual) is finite: the Jacobi step needs no residual gradient (24
+    /// bytes a texel at 4096^2 maps: 0.25 GB), only that check.
+    bool backward(Image& d_albedo, Image& d_normal, std::vector<float>* d_residual,
                   std::vector<FieldOutputGrads>* d_field) const;
+    /// Adds dL/d(residual) from gradients backward() has already folded (read only).
+    void add_residual_gradient(const Image& d_albedo, const Image& d_normal, std::vector<float>& d_residual) const;
     /// The Jacobi (diagonal Gauss-Newton) update of the residual: `d_albedo` and `d_normal` hold
     /// per texel the gradient (channels 0-2) and the loss's curvature summed over the texel's
     /// footprint (channel 3), gutter already folded by backward(). Each texel with curvature
@@ -76,7 +83,6 @@ private:
     std::vector<FieldOutputs> m_field_outputs;
     FieldCache m_cache;
     Image m_albedo_low, m_albedo_high;  ///< empty: no bound
-    Image m_step_scratch;  ///< jacobi_step's smoothing buffer (kept: no allocation per iteration)
     MipTexture m_albedo, m_normal;  ///< level 0 is the composed map (update())
 };
 

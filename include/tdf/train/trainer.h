@@ -156,12 +156,20 @@ public:
     /// Frees the per-iteration buffers (views, hits, map gradients) once training is over, so
     /// that exporting and evaluating do not add to their peak; the next step re-allocates them.
     void release_training_buffers();
+    /// Once the last iteration has run: frees the per-iteration buffers and what only further
+    /// iterations read (texture evaluation: the residual and its optimizer state, the field's
+    /// outputs at the texels, the colour bounds: 80 bytes a texel, 1.3 GB at 4096^2 maps). The
+    /// maps stay for export_maps(), evaluate_held_out() and the measures; step(), parameters()
+    /// and checkpoints refuse from then on.
+    void finish_training();
 
     /// Iteration `i`'s losses and their gradient with respect to parameters(), without changing
     /// anything (for finite-difference checks of the whole trainer). Guidance targets count as
     /// constants, as in step(). Texture evaluation: `i` must be past the matching phase.
     LossRecord loss_and_gradient(int i);
     /// The gradient from the last loss_and_gradient() (or step()), laid out like parameters().
+    /// With the Jacobi residual step (the default), only after loss_and_gradient(): step() has
+    /// consumed the map gradients the residual's is derived from.
     std::vector<float> gradient() const;
     /// Replaces every trained value (laid out like parameters()) and refreshes the maps.
     void set_parameters(const std::vector<float>& parameters);
@@ -276,8 +284,10 @@ private:
     MipTexture m_albedo_target_texture;
     MipTexture m_tactile_target_texture;
     std::unique_ptr<Adam> m_residual_adam;
-    std::vector<float> m_residual_gradient;
+    std::vector<float> m_residual_gradient;  // Adam's residual step only
+    bool m_map_gradients_unstepped = false;  // Batch's map gradients are backward()'s, not yet stepped on
     bool m_maps_ready = false;
+    bool m_training_finished = false;  // finish_training() ran
     // Multi-part.
     std::unique_ptr<PartLabelHead> m_label_head;
     std::unique_ptr<Adam> m_label_adam;
