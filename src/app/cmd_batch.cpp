@@ -189,7 +189,6 @@ int run_status(const BatchOptions& o) {
 // What the Slurm finish job runs once every array task has ended.
 int run_finish(const BatchOptions& o) {
     const BatchFolder folder = BatchFolder::open(o.folder);
-    if (defer_finish_for_requeued_tasks(folder) > 0) return 0;  // a later finish job summarises
     const int resubmitted = submit_retry_round(folder);
     write_batch_summary(folder);
     std::fputs(batch_status_table(folder).c_str(), stdout);

@@ -230,6 +230,10 @@ std::string BatchFolder::output_folder(const BatchJob& job) const {
 std::string BatchFolder::state_path(const BatchJob& job) const { return path("state/" + job.name + ".json"); }
 std::string BatchFolder::log_path(const BatchJob& job) const { return path("logs/" + job.name + ".log"); }
 
+namespace {
+
+// Whether Slurm still knows the array task `id` ("123_4"): false only when squeue answered and
+// did not list it (a node failure or SIGKILL left a "running" state behind).
 bool slurm_task_alive(const std::string& id, const std::string& scratch) {
     try {
         const std::string out = scratch + "/.squeue." + std::to_string(getpid()) + ".out";
@@ -247,6 +251,8 @@ bool slurm_task_alive(const std::string& id, const std::string& scratch) {
         return true;  // no squeue here: cannot tell
     }
 }
+
+}  // namespace
 
 JobState BatchFolder::read_state(const BatchJob& job) const {
     const std::string file = state_path(job);

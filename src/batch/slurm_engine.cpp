@@ -303,7 +303,6 @@ SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::s
         summary_args.push_back(a);
     summary_args.push_back(summary_script);
     submission.summary_job = sbatch(options, summary_args, dir, nullptr);
-    write_text_atomically(dir + "/finish_job", submission.summary_job + "\n");
     log_info("finish job {} runs after the array(s) (afterany)", submission.summary_job);
     {
         std::ofstream record(dir + "/submissions.jsonl", std::ios::app);
@@ -331,12 +330,6 @@ SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::s
 }
 
 std::string latest_finish_job(const BatchFolder& folder) {
-    // The newest finish job, a deferred one included (defer_finish_for_requeued_tasks).
-    if (const std::string pointer = folder.path("slurm/finish_job"); fs::exists(pointer)) {
-        std::string id = read_text_file(pointer);
-        while (!id.empty() && (id.back() == '\n' || id.back() == ' ')) id.pop_back();
-        if (!id.empty()) return id;
-    }
     const std::string path = folder.path("slurm/submissions.jsonl");
     if (!fs::exists(path)) return {};
     const std::string text = read_text_file(path);
@@ -366,38 +359,6 @@ void wait_for_slurm_job(const BatchFolder& folder, const SlurmOptions& options, 
                                   "--wrap=true"})
         args.push_back(a);
     sbatch(options, args, folder.path("slurm"), &exit_code);
-}
-
-int defer_finish_for_requeued_tasks(const BatchFolder& folder) {
-    const std::string path = folder.path("slurm/options.json");
-    if (!fs::exists(path)) return 0;
-    const SlurmOptions options = SlurmOptions::from_json(load_json_file(path));
-    std::string after;
-    int waiting = 0;
-    for (const BatchJob& job : folder.jobs()) {
-        const JobState s = folder.read_state(job);
-        if (s.status != JobStatus::Interrupted || s.slurm_job.empty()) continue;
-        if (!slurm_task_alive(s.slurm_job, folder.path("state"))) continue;
-        after += ":" + s.slurm_job;
-        ++waiting;
-    }
-    if (waiting == 0) return 0;
-    // Slurm may release an afterany dependency while a task requeues itself; the summary must
-    // not close the batch under a job that will still run.
-    std::vector<std::string> args = options.sbatch_options;
-    for (const std::string& a : std::vector<std::string>{"--job-name=tdf-summary",
-                                                         "--dependency=afterany" + after,
-                                                         "--kill-on-invalid-dep=no",
-                                                         "--cpus-per-task=1",
-                                                         "--ntasks=1",
-                                                         "--output=" + folder.root() + "/logs/slurm-summary-%j.out",
-                                                         "--chdir=" + folder.root()})
-        args.push_back(a);
-    args.push_back(folder.path("slurm/summary.sh"));
-    const std::string id = sbatch(options, args, folder.path("slurm"), nullptr);
-    write_text_atomically(folder.path("slurm/finish_job"), id + "\n");
-    log_info("{} requeued task(s) will still run ({}): finish job {} follows them", waiting, after.substr(1), id);
-    return waiting;
 }
 
 int submit_retry_round(const BatchFolder& folder) {

@@ -110,9 +110,4 @@ private:
 /// This machine's host name.
 std::string host_name();
 
-/// Whether Slurm still knows the array task `id` ("123_4"): false only when squeue answered and
-/// did not list it (a node failure or SIGKILL left a "running" state behind; a task that ended
-/// long ago). `scratch`: a folder for squeue's output. True when there is no squeue to ask.
-bool slurm_task_alive(const std::string& id, const std::string& scratch);
-
 }  // namespace tdf

@@ -88,18 +88,11 @@ std::vector<SlurmJobGroup> slurm_job_groups(const BatchFolder& folder,
 SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::size_t>& indices,
                              const SlurmOptions& options);
 
-/// `tdf batch finish DIR`, first: when an interrupted job's Slurm task is still known to Slurm
-/// (it requeued itself, and Slurm released the finish job's afterany dependency meanwhile),
-/// submits another finish job after those tasks (recorded in DIR/slurm/finish_job, which
-/// latest_finish_job follows) and returns how many; the caller then stops without a summary.
-int defer_finish_for_requeued_tasks(const BatchFolder& folder);
-
 /// `tdf batch finish DIR` (the finish job): submits the jobs that failed for a resource and have
 /// tries left (the options recorded in DIR/slurm/options.json) as a new round; returns how many.
 int submit_retry_round(const BatchFolder& folder);
 
-/// The newest finish job: DIR/slurm/finish_job (written by every submission and deferral), else
-/// the one the latest submission recorded in DIR/slurm/submissions.jsonl; "" when none.
+/// The finish job the latest submission recorded in DIR/slurm/submissions.jsonl, "" when none.
 std::string latest_finish_job(const BatchFolder& folder);
 
 /// Blocks until Slurm job `id` has ended: `sbatch --wait` of an empty job that depends on it.
