@@ -186,9 +186,15 @@ int run_status(const BatchOptions& o) {
     return batch_totals(folder).exit_code();
 }
 
+// How long the finish job waits for tasks that requeued themselves to run again: long enough for
+// Slurm's hold on a requeued job (about 2 minutes) and a resumed run, bounded so that a task held
+// in the queue does not keep the finish job (one CPU) forever.
+constexpr double kFinishWaitSeconds = 30 * 60;
+
 // What the Slurm finish job runs once every array task has ended.
 int run_finish(const BatchOptions& o) {
     const BatchFolder folder = BatchFolder::open(o.folder);
+    wait_for_requeued_jobs(folder, kFinishWaitSeconds);
     const int resubmitted = submit_retry_round(folder);
     write_batch_summary(folder);
     std::fputs(batch_status_table(folder).c_str(), stdout);

@@ -100,6 +100,7 @@ Json JobState::to_json() const {
             {"failed_hosts", failed_hosts},
             {"pid", pid},
             {"slurm_job", slurm_job},
+            {"requeued", requeued},
             {"command_line", command_line},
             {"output", output},
             {"thumbnail", thumbnail},
@@ -122,6 +123,7 @@ JobState JobState::from_json(const Json& json) {
     s.failed_hosts = json.value("failed_hosts", std::vector<std::string>());
     s.pid = json.value("pid", 0);
     s.slurm_job = json.value("slurm_job", std::string());
+    s.requeued = json.value("requeued", false);
     s.command_line = json.value("command_line", std::string());
     s.output = json.value("output", std::string());
     s.thumbnail = json.value("thumbnail", std::string());
@@ -230,10 +232,6 @@ std::string BatchFolder::output_folder(const BatchJob& job) const {
 std::string BatchFolder::state_path(const BatchJob& job) const { return path("state/" + job.name + ".json"); }
 std::string BatchFolder::log_path(const BatchJob& job) const { return path("logs/" + job.name + ".log"); }
 
-namespace {
-
-// Whether Slurm still knows the array task `id` ("123_4"): false only when squeue answered and
-// did not list it (a node failure or SIGKILL left a "running" state behind).
 bool slurm_task_alive(const std::string& id, const std::string& scratch) {
     try {
         const std::string out = scratch + "/.squeue." + std::to_string(getpid()) + ".out";
@@ -251,8 +249,6 @@ bool slurm_task_alive(const std::string& id, const std::string& scratch) {
         return true;  // no squeue here: cannot tell
     }
 }
-
-}  // namespace
 
 JobState BatchFolder::read_state(const BatchJob& job) const {
     const std::string file = state_path(job);

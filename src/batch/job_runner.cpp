@@ -188,23 +188,26 @@ struct RunningJob {
     bool timed_out = false;  ///< SIGTERM sent at the --timeout; SIGKILL follows after the grace
 };
 
-void requeue_this_task() {
+// Asks Slurm to run this array task again; returns whether it accepted.
+bool requeue_this_task() {
     const char* array_job = std::getenv("SLURM_ARRAY_JOB_ID");
     const char* task = std::getenv("SLURM_ARRAY_TASK_ID");
     const char* job = std::getenv("SLURM_JOB_ID");
     const std::string id = array_job && task ? std::string(array_job) + "_" + task : job ? job : "";
-    if (id.empty()) return;
+    if (id.empty()) return false;
     try {
         const ProcessOutcome outcome = run_process({"scontrol", "requeue", id}, "", 60, "", "");
-        if (outcome.exit_code == 0)
+        if (outcome.exit_code == 0) {
             log_info("requeued Slurm task {}: it continues from its checkpoint when it runs again", id);
-        else
-            log_warning("scontrol requeue {} failed (exit {}); Slurm may requeue it itself (preemption)",
-                        id,
-                        outcome.exit_code);
+            return true;
+        }
+        log_warning("scontrol requeue {} failed (exit {}); Slurm may requeue it itself (preemption)",
+                    id,
+                    outcome.exit_code);
     } catch (const Error& e) {
         log_warning("cannot requeue Slurm task {}: {}", id, e.what());
     }
+    return false;
 }
 
 }  // namespace
@@ -249,7 +252,14 @@ void JobLoop::account(const BatchJob& job, std::size_t index, const JobState& st
         case JobStatus::Interrupted:
             ++outcome.interrupted;
             log_info("interrupted {}: {}", job.name, state.error);
-            if (plan.requeue_interrupted) requeue_this_task();
+            if (plan.requeue_interrupted) {
+                // Recorded before asking: Slurm may end this runner as it requeues the task, and
+                // the finish job must know that the job will run again (wait_for_requeued_jobs).
+                JobState requeued = state;
+                requeued.requeued = true;
+                folder.write_state(job, requeued);
+                if (!requeue_this_task()) folder.write_state(job, state);
+            }
             return;
         default:
             break;
@@ -295,6 +305,7 @@ void JobLoop::start_job(std::size_t index) {
     state.pid = getpid();
     state.started = utc_timestamp();
     state.finished.clear();
+    state.requeued = false;
     state.error.clear();
     state.exit_code = -1;
     state.signal = 0;

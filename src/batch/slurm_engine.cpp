@@ -8,10 +8,12 @@
 #include <tdf/guidance/subprocess.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <thread>
 
 namespace tdf {
 
@@ -359,6 +361,38 @@ void wait_for_slurm_job(const BatchFolder& folder, const SlurmOptions& options, 
                                   "--wrap=true"})
         args.push_back(a);
     sbatch(options, args, folder.path("slurm"), &exit_code);
+}
+
+int wait_for_requeued_jobs(const BatchFolder& folder, double max_seconds) {
+    const auto start = std::chrono::steady_clock::now();
+    std::string announced;
+    for (;;) {
+        std::vector<std::string> waiting;
+        for (const BatchJob& job : folder.jobs()) {
+            const JobState s = folder.read_state(job);  // a "running" task Slurm lost reads as failed
+            if (s.slurm_job.empty()) continue;
+            const bool rerun = s.status == JobStatus::Running ||
+                               (s.status == JobStatus::Interrupted && s.requeued &&
+                                slurm_task_alive(s.slurm_job, folder.path("state")));
+            if (rerun) waiting.push_back(job.name + " (Slurm " + s.slurm_job + ")");
+        }
+        if (waiting.empty()) return 0;
+        const std::string names = fmt::format("{}", fmt::join(waiting, ", "));
+        const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (waited >= max_seconds) {
+            log_warning("after {:.0f} s, still requeued or running: {}; summarising without them "
+                        "(`tdf batch finish {}` summarises again once they end)",
+                        waited,
+                        names,
+                        folder.root());
+            return int(waiting.size());
+        }
+        if (names != announced) {
+            log_info("waiting for requeued job(s) to run again before the summary: {}", names);
+            announced = names;
+        }
+        std::this_thread::sleep_for(std::chrono::seconds(2));
+    }
 }
 
 int submit_retry_round(const BatchFolder& folder) {

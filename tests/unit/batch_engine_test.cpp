@@ -109,6 +109,44 @@ TEST(BatchEngine, ARunningStateWhoseRunnerIsGoneReadsAsFailed) {
     EXPECT_NE(lost.error.find("the runner stopped without recording a result"), std::string::npos);
 }
 
+// The finish job waits for a task that requeued itself while Slurm still lists it, and for
+// nothing else (max_seconds 0: it reports what it would still wait for, without waiting).
+TEST(BatchEngine, TheFinishJobWaitsOnlyForTasksThatRequeuedThemselves) {
+    const std::string root = fresh("requeued");
+    const auto jobs = parse_manifest("name,command,args\na,optimize,s.json\n", "m.csv");
+    const BatchFolder folder = BatchFolder::create(root, jobs, "/bin/true", root);
+    // A stand-in squeue: lists the task as PENDING, or lists nothing (Slurm forgot it).
+    const std::string bin = root + "/bin";
+    fs::create_directories(bin);
+    const auto fake_squeue = [&](const std::string& listing) {
+        write_text_atomically(bin + "/squeue", "#!/bin/sh\nprintf '" + listing + "'\n");
+        chmod((bin + "/squeue").c_str(), 0755);
+    };
+    const std::string path = std::getenv("PATH") ? std::getenv("PATH") : "";
+    setenv("PATH", (bin + ":" + path).c_str(), 1);
+
+    JobState state;
+    state.end_attempt(JobEnd::Preempted);
+    state.slurm_job = "7_1";
+    state.requeued = true;
+    folder.write_state(jobs[0], state);
+    EXPECT_TRUE(folder.read_state(jobs[0]).requeued);  // the flag survives the state file
+
+    fake_squeue("PENDING");
+    EXPECT_EQ(wait_for_requeued_jobs(folder, 0), 1);  // requeued and still listed: the summary waits
+    fake_squeue("");
+    EXPECT_EQ(wait_for_requeued_jobs(folder, 0), 0);  // cancelled or purged: nothing will run
+    fake_squeue("PENDING");
+    state.requeued = false;  // scontrol requeue failed: no rerun to wait for
+    folder.write_state(jobs[0], state);
+    EXPECT_EQ(wait_for_requeued_jobs(folder, 0), 0);
+    state.requeued = true;
+    state.end_attempt(JobEnd::Done);  // the rerun has ended
+    folder.write_state(jobs[0], state);
+    EXPECT_EQ(wait_for_requeued_jobs(folder, 0), 0);
+    setenv("PATH", path.c_str(), 1);
+}
+
 TEST(BatchEngine, ExitCodesAndSignalsClassifyAJobsEnd) {
     EXPECT_EQ(classify_job_end(1, 0, false), JobEnd::FailedInput);      // tdf::Error, usage
     EXPECT_EQ(classify_job_end(2, 0, false), JobEnd::FailedInput);      // compare: size mismatch

@@ -57,6 +57,7 @@ struct JobState {
     std::vector<std::string> failed_hosts;  ///< the host of each failed-resource try
     int pid = 0;               ///< the runner's pid while running
     std::string slurm_job;     ///< "<array job>_<task>" under Slurm
+    bool requeued = false;     ///< an interrupted Slurm task asked Slurm to run it again
     std::string command_line;  ///< the tdf command of the last attempt
     std::string output;        ///< absolute output folder
     std::string thumbnail;     ///< a PNG the job produced (path relative to the batch folder), or ""
@@ -109,5 +110,10 @@ private:
 
 /// This machine's host name.
 std::string host_name();
+
+/// Whether Slurm still knows the array task `id` ("123_4"): false only when squeue answered and
+/// did not list it (a node failure or SIGKILL left a "running" state behind; a task that ended
+/// long ago). `scratch`: a folder for squeue's output. True when there is no squeue to ask.
+bool slurm_task_alive(const std::string& id, const std::string& scratch);
 
 }  // namespace tdf

@@ -88,6 +88,13 @@ std::vector<SlurmJobGroup> slurm_job_groups(const BatchFolder& folder,
 SlurmSubmission submit_slurm(const BatchFolder& folder, const std::vector<std::size_t>& indices,
                              const SlurmOptions& options);
 
+/// `tdf batch finish DIR`, first: waits while a job whose Slurm task requeued itself after an
+/// interruption is still pending or running again (its state file says so and squeue still lists
+/// the task), polling every 2 s for at most `max_seconds`; returns how many were still waited for
+/// when it gave up (0: none left). Slurm can release the finish job's afterany dependency while a
+/// task requeues itself; without this wait the batch would close with that job "interrupted".
+int wait_for_requeued_jobs(const BatchFolder& folder, double max_seconds);
+
 /// `tdf batch finish DIR` (the finish job): submits the jobs that failed for a resource and have
 /// tries left (the options recorded in DIR/slurm/options.json) as a new round; returns how many.
 int submit_retry_round(const BatchFolder& folder);
