@@ -74,6 +74,35 @@ TEST(HeightExport, NonPeriodicMapKeepsItsNormals) {
     EXPECT_LT(relative_rms_error(back, zero_mean(h)), 0.04);
 }
 
+// The mirrored integration (one DCT pair on the map) is the periodic integration of the map
+// mirrored to twice its size (even heights, odd slopes), restricted to the map: the same least
+// squares, solved in a quarter of the memory. Odd sizes and a non-square map included.
+TEST(HeightExport, MirroredIntegrationEqualsThePeriodicSolutionOfTheMirror) {
+    for (const auto& [w, h] : {std::pair{37, 23}, std::pair{64, 64}}) {
+        const Image normals = normals_from_height(test::synthetic_texture(std::max(w, h), 5), 0.7f, false);
+        Image map(w, h, 3), mirror(2 * w, 2 * h, 3);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c) map.at(x, y, c) = normals.at(x, y, c);
+        for (int Y = 0; Y < 2 * h; ++Y)
+            for (int X = 0; X < 2 * w; ++X) {
+                const int x = X < w ? X : 2 * w - 1 - X, y = Y < h ? Y : 2 * h - 1 - Y;
+                mirror.at(X, Y, 0) = (X < w ? 1.0f : -1.0f) * map.at(x, y, 0);
+                mirror.at(X, Y, 1) = (Y < h ? 1.0f : -1.0f) * map.at(x, y, 1);
+                mirror.at(X, Y, 2) = map.at(x, y, 2);
+            }
+        const Image dct = integrate_normal_map(map, false), fft = integrate_normal_map(mirror, true);
+        double worst = 0, range = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                worst = std::max(worst, double(std::abs(dct.at(x, y, 0) - fft.at(x, y, 0))));
+                range = std::max(range, double(std::abs(fft.at(x, y, 0))));
+            }
+        EXPECT_GT(range, 0.1) << w << "x" << h;
+        EXPECT_LT(worst, 1e-5 * range) << w << "x" << h << ": largest difference " << worst;
+    }
+}
+
 // Scale: heights in mm are the integrated slopes times the texel size, so the same normals at
 // twice the texel size give twice the heights; the JSON says how to restore mm from the PNG.
 TEST(HeightExport, HeightsScaleWithTheTexelSize) {

@@ -19,9 +19,10 @@ namespace tdf {
 /// normals (normals_from_height with gain 1) are closest to `normals` (3+ channels, decoded; nz
 /// clamped to at least 0.1): Frankot-Chellappa with the central-difference operator
 /// i sin(w) instead of i w, solved with one FFT. `periodic`: the map wraps (a tileable map);
-/// else it is mirrored to twice its size first (even heights, odd slopes), so its borders do
-/// not wrap. What central differences cannot see (the checkerboard at the Nyquist frequency)
-/// is left out (zero). Throws tdf::Error naming `what` below 3 x 3 or for non-finite normals.
+/// else the solution is that of the map mirrored to twice its size (even heights, odd slopes),
+/// so its borders do not wrap, computed with one DCT-II pair on the map itself (8 bytes a texel).
+/// What central differences cannot see (the checkerboard at the Nyquist frequency) is left out
+/// (zero). Throws tdf::Error naming `what` below 3 x 3 or for non-finite normals.
 Image integrate_normal_map(const Image& normals, bool periodic, const std::string& what = "normal map");
 
 /// Mean cosine between `normals` (3+ channels, decoded; the length does not count) and the
