@@ -166,7 +166,7 @@ double chart_difference(const SurfaceTexels& s, const float* height, std::size_t
 struct Problem {
     Graph fine;
     std::vector<double> rhs;
-    std::vector<std::pair<int, int>> edges;  // for the coarse graph
+    std::vector<std::pair<int, int>> edges;  // while the graph is built
 };
 
 Problem texel_problem(const Image& texture_mm, float texture_mm_per_texel, const SurfaceTexels& s, float mm_per_unit,
@@ -212,6 +212,7 @@ Problem texel_problem(const Image& texture_mm, float texture_mm_per_texel, const
     }
     for (const auto& [i, j] : s.seam_links) link(i, j, 0.0);  // level across the seam
     problem.fine = make_unit_graph(n, problem.edges);
+    std::vector<std::pair<int, int>>().swap(problem.edges);  // 16 bytes a texel, in the graph now
     return problem;
 }
 
@@ -222,28 +223,35 @@ struct Coarse {
     Graph graph;
 };
 
-Coarse coarse_graph(const SurfaceTexels& s, const std::vector<std::pair<int, int>>& fine_edges) {
+Coarse coarse_graph(const SurfaceTexels& s, const Graph& fine) {
     Coarse c;
     const std::size_t n = s.covered_count();
-    std::vector<std::pair<std::uint64_t, int>> keys(n);
     const std::uint64_t blocks = std::uint64_t(s.size / kAggregate + 1);
-    for (std::size_t i = 0; i < n; ++i) {
+    const auto key = [&](std::size_t i) {
         const std::uint64_t x = s.texels[i] % std::uint32_t(s.size) / kAggregate, y = s.texels[i] / std::uint32_t(s.size) / kAggregate;
-        keys[i] = {(std::uint64_t(s.chart[i]) * blocks + y) * blocks + x, int(i)};
-    }
+        return (std::uint64_t(s.chart[i]) * blocks + y) * blocks + x;
+    };
+    // Coarse nodes numbered in key order: the distinct keys (one a block, ~n / 64) sorted, then
+    // each texel's found by bisection; no sorted copy of all n keys (16 bytes a texel).
+    std::vector<std::uint64_t> keys;
+    for (std::size_t i = 0; i < n; ++i)
+        if (const std::uint64_t k = key(i); keys.empty() || keys.back() != k) keys.push_back(k);
     std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     c.of.assign(n, -1);
-    int count = -1;
-    for (std::size_t k = 0; k < n; ++k) {
-        if (k == 0 || keys[k].first != keys[k - 1].first) ++count;
-        c.of[std::size_t(keys[k].second)] = count;
-    }
+    parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
+            c.of[i] = int(std::lower_bound(keys.begin(), keys.end(), key(i)) - keys.begin());
+    });
+    // Each fine edge once (from its lower end); the weights count them, so the order does not matter.
     std::vector<std::pair<std::pair<int, int>, float>> weighted;
-    for (const auto& [i, j] : fine_edges) {
-        const int a = c.of[std::size_t(i)], b = c.of[std::size_t(j)];
-        if (a != b) weighted.push_back({{a, b}, 1.0f});
-    }
-    c.graph = make_graph(std::size_t(count + 1), std::move(weighted));
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = fine.offset[i]; k < fine.offset[i + 1]; ++k) {
+            const std::size_t j = std::size_t(fine.neighbour[k]);
+            const int a = c.of[i], b = c.of[j];
+            if (i < j && a != b) weighted.push_back({{a, b}, 1.0f});
+        }
+    c.graph = make_graph(keys.size(), std::move(weighted));
     return c;
 }
 
@@ -257,15 +265,24 @@ void coarse_correction(const Problem& p, const Coarse& c, std::vector<double>& h
     for (std::size_t i = 0; i < h.size(); ++i) h[i] += e[std::size_t(c.of[i])];
 }
 
+/// The map of per-covered-texel heights `h`, less their mean (zero mean over the covered
+/// texels, as the texture-space integration), with the gutter filled.
+Image covered_heights_map(const std::vector<double>& h, const SurfaceTexels& surface) {
+    const double mean = h.empty() ? 0.0 : std::accumulate(h.begin(), h.end(), 0.0) / double(h.size());
+    Image out(surface.size, surface.size, 1);
+    for (std::size_t i = 0; i < h.size(); ++i) out.data()[surface.texels[i]] = float(h[i] - mean);
+    dilate_gutter(out, surface.node, 0);
+    return out;
+}
+
 }  // namespace
 
 Image heights_on_surface(const Image& texture_mm, float texture_mm_per_texel, const SurfaceTexels& surface,
                          float mm_per_unit, HeightMetric metric, SurfaceHeightStats* stats) {
     TDF_CHECK(texture_mm.channels() == 1 && texture_mm.width() == surface.size && texture_mm.height() == surface.size);
     TDF_CHECK(mm_per_unit > 0 && texture_mm_per_texel > 0);
-    Problem problem = texel_problem(texture_mm, texture_mm_per_texel, surface, mm_per_unit, metric);
-    const Coarse coarse = coarse_graph(surface, problem.edges);
-    std::vector<std::pair<int, int>>().swap(problem.edges);  // 16 bytes a texel, not needed by the solve
+    const Problem problem = texel_problem(texture_mm, texture_mm_per_texel, surface, mm_per_unit, metric);
+    const Coarse coarse = coarse_graph(surface, problem.fine);
     std::vector<double> h(surface.covered_count());
     for (std::size_t i = 0; i < h.size(); ++i) h[i] = texture_mm.data()[surface.texels[i]];
     int iterations = 0;
@@ -273,11 +290,7 @@ Image heights_on_surface(const Image& texture_mm, float texture_mm_per_texel, co
         coarse_correction(problem, coarse, h);
         iterations += conjugate_gradients(problem.fine, problem.rhs, h, kFineIterations, 0.0);
     }
-    // Zero mean over the covered texels, as the texture-space integration.
-    const double mean = h.empty() ? 0.0 : std::accumulate(h.begin(), h.end(), 0.0) / double(h.size());
-    Image out(surface.size, surface.size, 1);
-    for (std::size_t i = 0; i < h.size(); ++i) out.data()[surface.texels[i]] = float(h[i] - mean);
-    dilate_gutter(out, surface.node, 0);
+    Image out = covered_heights_map(h, surface);
     if (stats) {
         std::vector<double> r(h.size());
         multiply(problem.fine, h, r);
@@ -305,16 +318,10 @@ Image level_chart_offsets(const Image& texture_mm, const SurfaceTexels& surface)
     }
     const Graph graph = make_graph(std::size_t(charts), std::move(weighted));
     conjugate_gradients(graph, rhs, offset, kCoarseIterations, kCoarseTolerance);
-    double mean = 0;
-    for (std::size_t i = 0; i < surface.covered_count(); ++i)
-        mean += texture_mm.data()[surface.texels[i]] + offset[std::size_t(surface.chart[i])];
-    mean = surface.covered_count() > 0 ? mean / double(surface.covered_count()) : 0.0;
-    Image out(surface.size, surface.size, 1);
-    for (std::size_t i = 0; i < surface.covered_count(); ++i)
-        out.data()[surface.texels[i]] =
-            float(texture_mm.data()[surface.texels[i]] + offset[std::size_t(surface.chart[i])] - mean);
-    dilate_gutter(out, surface.node, 0);
-    return out;
+    std::vector<double> h(surface.covered_count());
+    for (std::size_t i = 0; i < h.size(); ++i)
+        h[i] = texture_mm.data()[surface.texels[i]] + offset[std::size_t(surface.chart[i])];
+    return covered_heights_map(h, surface);
 }
 
 double surface_height_consistency(const Image& height_mm, const Image& normals, const SurfaceTexels& s,
