@@ -19,20 +19,16 @@ constexpr int kFineIterations = 40;   // per round
 constexpr int kCoarseIterations = 2000;
 constexpr double kCoarseTolerance = 1e-6;
 
-/// A weighted graph Laplacian, (A x)_i = sum_j w_ij (x_i - x_j), in compressed rows. With unit
-/// weights (`weight` and `diagonal` empty) the diagonal is the degree, read from the offsets:
-/// 16 bytes a texel less at 4096^2 maps than storing both.
+/// A weighted graph Laplacian, (A x)_i = sum_j w_ij (x_i - x_j), in compressed rows: the coarse
+/// levels (blocks of texels, charts). The texel level is a TexelGraph.
 struct Graph {
-    std::vector<std::uint32_t> offset;  // n + 1 (4 edges a texel at most: fits 32 bits at 16384^2)
+    std::vector<std::uint32_t> offset;  // n + 1
     std::vector<int> neighbour;
-    std::vector<float> weight;  // empty: every weight 1
-    std::vector<double> diagonal;  // empty: every weight 1, the diagonal is the degree
+    std::vector<float> weight;
+    std::vector<double> diagonal;
 
-    std::size_t size() const { return offset.size() - 1; }
-    double diagonal_at(std::size_t i) const {
-        return diagonal.empty() ? double(offset[i + 1] - offset[i]) : diagonal[i];
-    }
-    double weight_at(std::size_t k) const { return weight.empty() ? 1.0 : double(weight[k]); }
+    std::size_t size() const { return diagonal.size(); }
+    double diagonal_at(std::size_t i) const { return diagonal[i]; }
 };
 
 /// Builds a graph from undirected edges (i, j, weight) with i != j, merged when repeated.
@@ -62,26 +58,12 @@ Graph make_graph(std::size_t n, std::vector<std::pair<std::pair<int, int>, float
     return g;
 }
 
-/// The texel graph: every edge weight 1, parallel edges kept as they are (two unit edges are one
-/// of weight 2 to the Laplacian), so no sort and no merged copy of 2 edges a texel (at 4096^2
-/// maps those were about 1 GB).
-Graph make_unit_graph(std::size_t n, const std::vector<std::pair<int, int>>& edges) {
-    Graph g;
-    g.offset.assign(n + 1, 0);
-    for (const auto& [i, j] : edges) ++g.offset[std::size_t(i) + 1], ++g.offset[std::size_t(j) + 1];
-    std::partial_sum(g.offset.begin(), g.offset.end(), g.offset.begin());
-    g.neighbour.resize(g.offset[n]);
-    std::vector<std::uint32_t> fill(g.offset.begin(), g.offset.end() - 1);
-    for (const auto& [i, j] : edges) g.neighbour[fill[std::size_t(i)]++] = j, g.neighbour[fill[std::size_t(j)]++] = i;
-    return g;
-}
-
 void multiply(const Graph& g, const std::vector<double>& x, std::vector<double>& out) {
     parallel_for(g.size(), kChunk, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
             double s = g.diagonal_at(i) * x[i];
             for (std::size_t k = g.offset[i]; k < g.offset[i + 1]; ++k)
-                s -= g.weight_at(k) * x[std::size_t(g.neighbour[k])];
+                s -= double(g.weight[k]) * x[std::size_t(g.neighbour[k])];
             out[i] = s;
         }
     });
@@ -101,7 +83,8 @@ double dot(const std::vector<double>& a, const std::vector<double>& b) {
 
 /// Jacobi-preconditioned conjugate gradients on A x = b from x; stops after `iterations` or at
 /// |r| <= tolerance |b|. Returns the iterations run.
-int conjugate_gradients(const Graph& g, const std::vector<double>& b, std::vector<double>& x, int iterations,
+template <class G>
+int conjugate_gradients(const G& g, const std::vector<double>& b, std::vector<double>& x, int iterations,
                         double tolerance) {
     const std::size_t n = g.size();
     // The preconditioned residual z = r / diagonal is not stored: it is recomputed where it is
@@ -161,12 +144,80 @@ double chart_difference(const SurfaceTexels& s, const float* height, std::size_t
     return 0.0;
 }
 
+/// The texel graph, every edge of weight 1, held implicitly: a covered texel's neighbours are
+/// the 4 texels around it on its chart (one bit each) and its partners across seams. They are
+/// visited in the order a compressed-row copy of the edge list held them (up, left, right,
+/// down, then the seam partners in link order), so every sum has the same bits as with that
+/// copy, without its 20 bytes a texel (320 MB at 4096^2 maps).
+class TexelGraph {
+public:
+    using SeamCursor = std::vector<std::pair<int, int>>::const_iterator;
+
+    explicit TexelGraph(const SurfaceTexels& s)
+        : m_s(&s), m_sides(s.covered_count(), 0), m_degree(s.covered_count(), 0) {
+        m_seams.reserve(2 * s.seam_links.size());
+        for (const auto& [a, b] : s.seam_links) m_seams.push_back({a, b}), m_seams.push_back({b, a});
+        std::stable_sort(m_seams.begin(), m_seams.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+        parallel_for(s.covered_count(), kChunk, [&](std::size_t begin, std::size_t end) {
+            SeamCursor seam = seams_from(begin);
+            for (std::size_t i = begin; i < end; ++i) {
+                const int sides = (chart_neighbour(s, i, 0, -1) >= 0 ? kUp : 0) |
+                                  (chart_neighbour(s, i, -1, 0) >= 0 ? kLeft : 0) |
+                                  (chart_neighbour(s, i, 1, 0) >= 0 ? kRight : 0) |
+                                  (chart_neighbour(s, i, 0, 1) >= 0 ? kDown : 0);
+                int degree = __builtin_popcount(unsigned(sides));
+                for (; seam != m_seams.end() && std::size_t(seam->first) == i; ++seam) ++degree;
+                TDF_CHECK(degree <= 255);
+                m_sides[i] = std::uint8_t(sides), m_degree[i] = std::uint8_t(degree);
+            }
+        });
+    }
+
+    std::size_t size() const { return m_sides.size(); }
+    double diagonal_at(std::size_t i) const { return double(m_degree[i]); }
+
+    /// The first seam partner of texel `begin` or after: where a pass from `begin` starts.
+    SeamCursor seams_from(std::size_t begin) const {
+        return std::lower_bound(m_seams.begin(), m_seams.end(), begin,
+                                [](const std::pair<int, int>& e, std::size_t i) { return std::size_t(e.first) < i; });
+    }
+
+    /// visit(j) for each neighbour j of texel i, in the order above; `seam` (from seams_from, for
+    /// ascending i) moves past i's partners.
+    template <class Visit>
+    void visit_neighbours(std::size_t i, SeamCursor& seam, Visit&& visit) const {
+        const std::size_t t = m_s->texels[i], row = std::size_t(m_s->size);
+        const int sides = m_sides[i];
+        if (sides & kUp) visit(std::size_t(m_s->node[t - row]));
+        if (sides & kLeft) visit(std::size_t(m_s->node[t - 1]));
+        if (sides & kRight) visit(std::size_t(m_s->node[t + 1]));
+        if (sides & kDown) visit(std::size_t(m_s->node[t + row]));
+        for (; seam != m_seams.end() && std::size_t(seam->first) == i; ++seam) visit(std::size_t(seam->second));
+    }
+
+private:
+    static constexpr int kUp = 1, kLeft = 2, kRight = 4, kDown = 8;
+    const SurfaceTexels* m_s;
+    std::vector<std::uint8_t> m_sides, m_degree;
+    std::vector<std::pair<int, int>> m_seams;  // (texel, partner), both ways, by texel, in link order
+};
+
+void multiply(const TexelGraph& g, const std::vector<double>& x, std::vector<double>& out) {
+    parallel_for(g.size(), kChunk, [&](std::size_t begin, std::size_t end) {
+        TexelGraph::SeamCursor seam = g.seams_from(begin);
+        for (std::size_t i = begin; i < end; ++i) {
+            double s = g.diagonal_at(i) * x[i];
+            g.visit_neighbours(i, seam, [&](std::size_t j) { s -= x[j]; });
+            out[i] = s;
+        }
+    });
+}
+
 /// The normal equations of the texel graph: A (unit weights) and b_i = -sum_j g_ij, g_ij the
 /// wanted h_j - h_i in mm.
 struct Problem {
-    Graph fine;
+    TexelGraph fine;
     std::vector<double> rhs;
-    std::vector<std::pair<int, int>> edges;  // while the graph is built
 };
 
 Problem texel_problem(const Image& texture_mm, float texture_mm_per_texel, const SurfaceTexels& s, float mm_per_unit,
@@ -179,13 +230,11 @@ Problem texel_problem(const Image& texture_mm, float texture_mm_per_texel, const
         for (std::size_t i = begin; i < end; ++i)
             slope_t[i] = chart_difference(s, texture_mm.data(), i, 1, 0) / double(texture_mm_per_texel);
     });
-    Problem problem;
-    problem.rhs.assign(n, 0.0);
-    problem.edges.reserve(2 * n + s.seam_links.size());  // no doubling copies at 4096^2
+    Problem problem{TexelGraph(s), std::vector<double>(n, 0.0)};
+    // The edges are the graph's (TexelGraph: the same 4-neighbours on the chart, and the seams).
     const auto link = [&](int i, int j, double wanted) {
         problem.rhs[std::size_t(i)] -= wanted;
         problem.rhs[std::size_t(j)] += wanted;
-        problem.edges.emplace_back(i, j);
     };
     // Each edge keeps the texture-space heights' own difference (so their fine structure, which
     // matches the normal map's central differences, stays), turned into the slopes it stands
@@ -211,8 +260,6 @@ Problem texel_problem(const Image& texture_mm, float texture_mm_per_texel, const
         }
     }
     for (const auto& [i, j] : s.seam_links) link(i, j, 0.0);  // level across the seam
-    problem.fine = make_unit_graph(n, problem.edges);
-    std::vector<std::pair<int, int>>().swap(problem.edges);  // 16 bytes a texel, in the graph now
     return problem;
 }
 
@@ -223,7 +270,7 @@ struct Coarse {
     Graph graph;
 };
 
-Coarse coarse_graph(const SurfaceTexels& s, const Graph& fine) {
+Coarse coarse_graph(const SurfaceTexels& s, const TexelGraph& fine) {
     Coarse c;
     const std::size_t n = s.covered_count();
     const std::uint64_t blocks = std::uint64_t(s.size / kAggregate + 1);
@@ -245,12 +292,12 @@ Coarse coarse_graph(const SurfaceTexels& s, const Graph& fine) {
     });
     // Each fine edge once (from its lower end); the weights count them, so the order does not matter.
     std::vector<std::pair<std::pair<int, int>, float>> weighted;
+    TexelGraph::SeamCursor seam = fine.seams_from(0);
     for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t k = fine.offset[i]; k < fine.offset[i + 1]; ++k) {
-            const std::size_t j = std::size_t(fine.neighbour[k]);
+        fine.visit_neighbours(i, seam, [&](std::size_t j) {
             const int a = c.of[i], b = c.of[j];
             if (i < j && a != b) weighted.push_back({{a, b}, 1.0f});
-        }
+        });
     c.graph = make_graph(keys.size(), std::move(weighted));
     return c;
 }

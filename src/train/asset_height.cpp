@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace tdf {
 
@@ -61,7 +62,7 @@ ExportedHeight export_surface_height(const Image& normals, const ExportScale& sc
     const SurfaceTexels surface = surface_texels(mesh, raster);
     SurfaceHeightStats stats;
     const double texture_space_only = out.mean_cosine;
-    const Image texture_mm = out.map.height;
+    const Image texture_mm = std::move(out.map.height);  // replaced below: no copy (64 MB at 4096^2)
     out.map.height = heights_on_surface(texture_mm, scale.mm_per_texel, surface, scale.mm_per_unit, metric, &stats);
     out.texture_space_cosine = height_normal_consistency(out.map.height, scale.mm_per_texel, normals, false, mask);
     out.seam_levelling = "full";
