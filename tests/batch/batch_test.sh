@@ -69,10 +69,19 @@ wait_for 30 "opt_long running" opt_long_running
 if [ "$engine" = slurm ]; then
   task=$(state b/state/opt_long.json slurm_job)
   [ -n "$task" ] || fail "no Slurm task id in opt_long's state"
+  # Hold opt_long (SIGSTOP) while the signal travels through Slurm: on a fast machine it finishes
+  # its 200 tiny iterations in about 4 s, sooner than scancel's signal arrives under load, and then
+  # there is nothing to interrupt. The SIGTERM the runner passes on waits, pending, until SIGCONT.
+  job_pid=$(pgrep -P "$(state b/state/opt_long.json pid)" | head -1)
+  [ -n "$job_pid" ] || fail "no running tdf under opt_long's task runner"
+  kill -STOP "$job_pid"
   # SIGTERM to the task runner, as before a preemption. The signal is delivered at once, but scancel
   # then keeps retrying for a minute ("Job can not be altered now") while the task requeues
   # itself: bound it; the requeue below is what counts.
   timeout 10 scancel --batch --signal=TERM "$task" 2>/dev/null || true
+  passed_on() { grep -q "passing SIGTERM" b/logs/slurm-*_1.out 2>/dev/null; }
+  wait_for 60 "the task runner passing SIGTERM to opt_long" passed_on
+  kill -CONT "$job_pid"
   # The runner requeues the task; Slurm holds a requeued job ~2 minutes (BeginTime): release it now.
   # (A function, so that squeue is asked again on every poll, not once when wait_for is called.)
   requeued() { [ "$(squeue -h -j "$task" -o %T 2>/dev/null)" = PENDING ]; }
