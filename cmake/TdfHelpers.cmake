@@ -39,7 +39,7 @@ endfunction()
 # tdf_add_test_suite(<module> DEPS <targets...> LABELS <labels...>)
 # One gtest executable per module from tests/unit/<module>_*_test.cpp.
 function(tdf_add_test_suite module)
-  cmake_parse_arguments(ARG "" "" "DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "COST" "DEPS;LABELS" ${ARGN})
   file(GLOB _srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/unit/${module}_*_test.cpp)
   if(NOT _srcs)
     return()
@@ -55,6 +55,11 @@ function(tdf_add_test_suite module)
   # PROPERTIES, so a suite gets ONE label joining its tiers ("unit_gradcheck"); `ctest -L` takes a
   # regular expression, so `-L unit` and `-L gradcheck` both select it.
   string(REPLACE ";" "_" _labels "${ARG_LABELS}")
-  gtest_discover_tests(${_target} DISCOVERY_MODE PRE_TEST PROPERTIES LABELS "${_labels}"
+  # COST: ctest -j starts the costliest tests first (the CI's fresh build has no measured costs),
+  # so that no long test starts last and runs alone.
+  if(NOT ARG_COST)
+    set(ARG_COST 1)
+  endif()
+  gtest_discover_tests(${_target} DISCOVERY_MODE PRE_TEST PROPERTIES LABELS "${_labels}" COST ${ARG_COST}
                        WORKING_DIRECTORY ${PROJECT_SOURCE_DIR} DISCOVERY_TIMEOUT 60)
 endfunction()

@@ -5,7 +5,7 @@ foreach(_engine local slurm)
   add_test(NAME BatchCli.${_engine}
            COMMAND bash ${PROJECT_SOURCE_DIR}/tests/batch/batch_test.sh ${_engine} $<TARGET_FILE:tdf>
                    ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/test-scratch/batch_cli_${_engine})
-  set_tests_properties(BatchCli.${_engine} PROPERTIES LABELS unit SKIP_RETURN_CODE 77 TIMEOUT 900)
+  set_tests_properties(BatchCli.${_engine} PROPERTIES LABELS unit SKIP_RETURN_CODE 77 TIMEOUT 900 COST 60)
 endforeach()
 
 # 20 tiny jobs with injected bad inputs and self-kills: failure classes, retries, --max-failures,
@@ -13,4 +13,4 @@ endforeach()
 add_test(NAME BatchCli.retries
          COMMAND bash ${PROJECT_SOURCE_DIR}/tests/batch/batch_retry_test.sh $<TARGET_FILE:tdf>
                  ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/test-scratch/batch_cli_retries)
-set_tests_properties(BatchCli.retries PROPERTIES LABELS unit TIMEOUT 600)
+set_tests_properties(BatchCli.retries PROPERTIES LABELS unit TIMEOUT 600 COST 55)

@@ -41,19 +41,19 @@ set(_tiny optimize.iterations=4 optimize.init_iterations=2 optimize.resolution=6
 
 add_test(NAME ReportBrowser.OptimizeRun
          COMMAND tdf --quiet optimize ${PROJECT_SOURCE_DIR}/scenes/pebble_sphere/scene.json -o ${_out}/run ${_tiny})
-set_tests_properties(ReportBrowser.OptimizeRun PROPERTIES LABELS browser FIXTURES_SETUP report_pages)
+set_tests_properties(ReportBrowser.OptimizeRun PROPERTIES LABELS browser FIXTURES_SETUP report_pages COST 64)
 
 # Two golden views: every pass differs, so the page shows failures and heatmaps (exit 1 = fail).
 add_test(NAME ReportBrowser.ComparePage
          COMMAND sh -c "\"$0\" compare \"$1\" \"$2\" --erode-mask 1 --html \"$3\" > /dev/null; test $? = 1"
                  $<TARGET_FILE:tdf> ${PROJECT_SOURCE_DIR}/reference/golden/pebble_visualizer/view_000.exr
                  ${PROJECT_SOURCE_DIR}/reference/golden/pebble_visualizer/view_001.exr ${_out}/compare/compare.html)
-set_tests_properties(ReportBrowser.ComparePage PROPERTIES LABELS browser FIXTURES_SETUP report_pages)
+set_tests_properties(ReportBrowser.ComparePage PROPERTIES LABELS browser FIXTURES_SETUP report_pages COST 64)
 
 add_test(NAME ReportBrowser.BatchIndex
          COMMAND report_batch_demo ${_out}/batch ${_out}/run/pebble_sphere_report.html
                  ${_out}/run/turntable/albedo_000.png)
-set_tests_properties(ReportBrowser.BatchIndex PROPERTIES LABELS browser FIXTURES_SETUP report_pages
+set_tests_properties(ReportBrowser.BatchIndex PROPERTIES LABELS browser FIXTURES_SETUP report_pages COST 64
                      DEPENDS ReportBrowser.OptimizeRun)
 
 # Every shipped scene's exported .glb through the Khronos validator: 0 errors, 0 warnings.
@@ -70,7 +70,7 @@ foreach(_scene_file ${_scenes})
   add_test(NAME GltfValidator.Export.${_scene}
            COMMAND tdf --quiet optimize ${PROJECT_SOURCE_DIR}/scenes/${_scene_file} -o ${_out}/glb/${_scene} ${_tiny}
                    export.turntable_views=0)
-  set_tests_properties(GltfValidator.Export.${_scene} PROPERTIES LABELS gltf FIXTURES_SETUP gltf_exports)
+  set_tests_properties(GltfValidator.Export.${_scene} PROPERTIES LABELS gltf FIXTURES_SETUP gltf_exports COST 64)
   list(APPEND _glbs ${_out}/glb/${_scene}/${_scene}.glb)
   list(APPEND _scene_pages ${_out}/glb/${_scene}/${_scene}_report.html)
 endforeach()
@@ -84,6 +84,8 @@ add_test(NAME ReportBrowser.Pages
          COMMAND ${TDF_NODE} ${_web}/tests/check_pages.js --chromium ${TDF_CHROMIUM} --tdf $<TARGET_FILE:tdf>
                  --out ${_out}/screenshots ${_out}/run/pebble_sphere_report.html ${_out}/compare/compare.html
                  ${_out}/batch/index.html ${_scene_pages})
-set_tests_properties(ReportBrowser.Pages PROPERTIES LABELS browser FIXTURES_REQUIRED "report_pages;gltf_exports"
+# COST: ctest -j starts costlier tests first. The page check (about 60 s) waits for its fixtures'
+# exports, so both go first, and the check does not run alone at the end.
+set_tests_properties(ReportBrowser.Pages PROPERTIES LABELS browser COST 63 FIXTURES_REQUIRED "report_pages;gltf_exports"
                      PASS_REGULAR_EXPRESSION " 0 failed" TIMEOUT 600)
 
