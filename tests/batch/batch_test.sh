@@ -35,7 +35,7 @@ small="$small export.turntable_resolution=32 export.glb=false guidance.tactile=n
 cat > manifest.csv <<EOF
 name,command,args
 opt_small,optimize,$scene optimize.iterations=4 optimize.init_iterations=2 $small --name pebble
-opt_long,optimize,$scene optimize.iterations=200 optimize.init_iterations=150 optimize.checkpoint_every=5 $small --name pebble
+opt_long,optimize,$scene optimize.iterations=600 optimize.init_iterations=550 optimize.checkpoint_every=5 $small --name pebble
 render_views,render,$scene image.width=32 image.height=32 --png
 compare_golden,compare,$golden/view_000.exr $golden/view_000.exr
 broken,render,$scene image.width=0
@@ -62,19 +62,24 @@ else
 fi
 runner=$!
 
-# Stop opt_long once it has written its first checkpoint (iteration 5 of 200).
-wait_for 300 "opt_long's first checkpoint" test -s b/jobs/opt_long/checkpoint.bin
+# Stop opt_long once it has written its first checkpoint (iteration 5 of 600: its SIGTERM handler
+# is installed by then). Polled tightly and without Python: the whole job takes about 6 s on a
+# quiet machine, and the signal must find it running.
+for _ in $(seq 1 6000); do test -s b/jobs/opt_long/checkpoint.bin && break; sleep 0.05; done
+test -s b/jobs/opt_long/checkpoint.bin || fail "timed out after 300s waiting for opt_long's first checkpoint"
+if [ "$engine" = slurm ]; then
+  # Hold opt_long (SIGSTOP) while the signal travels through Slurm: under load, scancel's signal
+  # can arrive seconds later, after the job has ended, and then there is nothing to interrupt. The
+  # SIGTERM the runner passes on stays pending until SIGCONT.
+  job_pid=$(pgrep -f -- "optimize .* -o .*/b/jobs/opt_long$" | head -1)
+  [ -n "$job_pid" ] || fail "opt_long's tdf ended before it could be held (no process)"
+  kill -STOP "$job_pid"
+fi
 opt_long_running() { [ "$(state b/state/opt_long.json status)" = running ]; }
 wait_for 30 "opt_long running" opt_long_running
 if [ "$engine" = slurm ]; then
   task=$(state b/state/opt_long.json slurm_job)
   [ -n "$task" ] || fail "no Slurm task id in opt_long's state"
-  # Hold opt_long (SIGSTOP) while the signal travels through Slurm: on a fast machine it finishes
-  # its 200 tiny iterations in about 4 s, sooner than scancel's signal arrives under load, and then
-  # there is nothing to interrupt. The SIGTERM the runner passes on waits, pending, until SIGCONT.
-  job_pid=$(pgrep -P "$(state b/state/opt_long.json pid)" | head -1)
-  [ -n "$job_pid" ] || fail "no running tdf under opt_long's task runner"
-  kill -STOP "$job_pid"
   # SIGTERM to the task runner, as before a preemption. The signal is delivered at once, but scancel
   # then keeps retrying for a minute ("Job can not be altered now") while the task requeues
   # itself: bound it; the requeue below is what counts.
