@@ -165,7 +165,8 @@ Json tactile_roundtrip(const std::string& folder, const SceneAssets& assets, con
             uvs.push_back({p.uv.x, p.uv.y});
             touch_parts.push_back(part.name);
         }
-        const TouchRoundTrip r = compare_touches(measure_capture(part.map.normals, part.pitch_mm, pad.width), measures);
+        const CaptureArea area = resolve_capture_area(part.map.normals, CaptureArea::Auto);  // once: the wrap statistics
+        const TouchRoundTrip r = compare_touches(measure_capture(part.map.normals, part.pitch_mm, pad.width, area), measures);
         const std::string capture_png = part.name.empty() ? "capture_gelsight.png" : "capture_" + part.name + "_gelsight.png";
         write_png(touch_folder + "/" + capture_png, capture_preview(part.map.normals, pad), 8, Quantize::Round);
         const double n = double(measures.size());
@@ -175,8 +176,7 @@ Json tactile_roundtrip(const std::string& folder, const SceneAssets& assets, con
         j["name"] = part.name, j["capture_image"] = part.image, j["capture_preview"] = "touch/" + capture_png;
         j["touch_count"] = int(measures.size()), j["within_aim"] = within_aim(r);
         j["pitch_mm"] = part.pitch_mm;
-        j["capture_area"] =
-            resolve_capture_area(part.map.normals, CaptureArea::Auto) == CaptureArea::Contact ? "contact" : "whole";
+        j["capture_area"] = area == CaptureArea::Contact ? "contact" : "whole";
         // How much finer (< 1) or coarser the scene lays this part's relief than it was captured.
         if (!part.name.empty()) j["relief_scale"] = part.pitch_mm / part.own_pitch_mm;
         per_part.push_back(j);
