@@ -69,16 +69,22 @@ void multiply(const Graph& g, const std::vector<double>& x, std::vector<double>&
     });
 }
 
-double dot(const std::vector<double>& a, const std::vector<double>& b) {
-    std::vector<double> partial(chunk_count(a.size(), kChunk), 0.0);
+/// The sum of term(i) over [0, n), in fixed chunks: the same bits on any thread count.
+template <class Term>
+double chunked_sum(std::size_t n, Term&& term) {
+    std::vector<double> partial(chunk_count(n, kChunk), 0.0);
     parallel_for(partial.size(), 1, [&](std::size_t c0, std::size_t c1) {
         for (std::size_t c = c0; c < c1; ++c) {
             double s = 0;
-            for (std::size_t i = c * kChunk; i < std::min(a.size(), (c + 1) * kChunk); ++i) s += a[i] * b[i];
+            for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) s += term(i);
             partial[c] = s;
         }
     });
     return std::accumulate(partial.begin(), partial.end(), 0.0);
+}
+
+double dot(const std::vector<double>& a, const std::vector<double>& b) {
+    return chunked_sum(a.size(), [&](std::size_t i) { return a[i] * b[i]; });
 }
 
 /// Jacobi-preconditioned conjugate gradients on A x = b from x; stops after `iterations` or at
@@ -97,17 +103,7 @@ int conjugate_gradients(const G& g, const std::vector<double>& b, std::vector<do
         const double d = g.diagonal_at(i);
         return d > 0 ? r[i] / d : 0.0;
     };
-    const auto r_dot_z = [&] {
-        std::vector<double> partial(chunk_count(n, kChunk), 0.0);
-        parallel_for(partial.size(), 1, [&](std::size_t c0, std::size_t c1) {
-            for (std::size_t c = c0; c < c1; ++c) {
-                double s = 0;
-                for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) s += r[i] * z(i);
-                partial[c] = s;
-            }
-        });
-        return std::accumulate(partial.begin(), partial.end(), 0.0);
-    };
+    const auto r_dot_z = [&] { return chunked_sum(n, [&](std::size_t i) { return r[i] * z(i); }); };
     for (std::size_t i = 0; i < n; ++i) p[i] = z(i);
     double rz = r_dot_z();
     int k = 0;
