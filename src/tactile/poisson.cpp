@@ -35,18 +35,11 @@ Image integrate_gradients(const Image& gx, const Image& gy, const std::string& w
             f[std::size_t(y) * std::size_t(w) + std::size_t(x)] = div;
         }
 
-    const fftw::Plan forward = fftw::plan_r2r(w, h, f, FFTW_REDFT10);
-    const fftw::Plan inverse = fftw::plan_r2r(w, h, f, FFTW_REDFT01);
-    fftw_execute(forward.get());
     // Eigenvalues of the reflecting 5-point Laplacian on the DCT-II basis.
     const double pi = 3.14159265358979323846;
-    for (int v = 0; v < h; ++v)
-        for (int u = 0; u < w; ++u) {
-            const double lambda = 2.0 * std::cos(pi * u / w) - 2.0 + 2.0 * std::cos(pi * v / h) - 2.0;
-            double& value = f[std::size_t(v) * std::size_t(w) + std::size_t(u)];
-            value = (u == 0 && v == 0) ? 0.0 : value / lambda;  // the mean is free: choose zero
-        }
-    fftw_execute(inverse.get());
+    fftw::solve_in_cosine_basis(f, w, h, [&](int u, int v) {
+        return 2.0 * std::cos(pi * u / w) - 2.0 + 2.0 * std::cos(pi * v / h) - 2.0;
+    });
 
     Image height(w, h, 1);
     const double normalisation = 1.0 / (4.0 * double(w) * double(h));  // REDFT10 then REDFT01
