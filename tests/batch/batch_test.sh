@@ -91,6 +91,13 @@ if [ "$engine" = slurm ]; then
   # (A function, so that squeue is asked again on every poll, not once when wait_for is called.)
   requeued() { [ "$(squeue -h -j "$task" -o %T 2>/dev/null)" = PENDING ]; }
   wait_for 120 "opt_long requeued" requeued
+  # Not within a second of the requeue: slurmd refuses a job whose credential is no newer than the
+  # revocation of its previous run (which it records a moment after the requeue), compared in whole
+  # seconds ("Job credential revoked", and the task fails for good; seen in CI). Slurm's own delay
+  # avoids that; a release in the same second does not. So: two clock seconds on.
+  requeued_at=$(date +%s)
+  two_seconds_on() { [ "$(date +%s)" -gt "$((requeued_at + 1))" ]; }
+  wait_for 5 "two clock seconds after the requeue" two_seconds_on
   scontrol update JobId="$task" StartTime=now
   set +e; wait $runner; rc=$?; set -e
   [ $rc = 2 ] || { cat run1.err; fail "tdf batch run --engine slurm --wait: exit $rc, expected 2 (one job failed)"; }
