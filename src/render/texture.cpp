@@ -39,12 +39,21 @@ MipTexture::MipTexture(Image&& image) {
     if (image.channels() > kMaxTextureChannels)
         throw_error("textures have at most {} channels, this image has {}", kMaxTextureChannels, image.channels());
     m_levels.push_back(std::move(image));
-    while (m_levels.back().width() > 1 || m_levels.back().height() > 1)
-        m_levels.push_back(downsample_box(m_levels.back()));
+    restore_levels();
 }
 
 void MipTexture::rebuild_levels() {
     for (std::size_t k = 1; k < m_levels.size(); ++k) downsample_box_into(m_levels[k - 1], m_levels[k]);
+}
+
+void MipTexture::drop_levels() {
+    if (!m_levels.empty()) m_levels.resize(1);
+}
+
+void MipTexture::restore_levels() {
+    TDF_CHECK(!m_levels.empty());
+    while (m_levels.back().width() > 1 || m_levels.back().height() > 1)
+        m_levels.push_back(downsample_box(m_levels.back()));
 }
 
 namespace {

@@ -64,6 +64,20 @@ void LearnedMaps::release_training_state() {
     m_albedo_high = Image();
 }
 
+void LearnedMaps::release_derived() {
+    m_field_outputs = {};
+    m_cache.clear();
+    m_albedo.drop_levels();
+    m_normal.drop_levels();
+}
+
+void LearnedMaps::restore_derived(const TextureField& field, bool keep_encodings) {
+    m_field_outputs.resize(m_atlas->covered_count());
+    evaluate_field(field, keep_encodings);
+    m_albedo.restore_levels();
+    m_normal.restore_levels();
+}
+
 void LearnedMaps::update() {
     const TexelAtlas& a = *m_atlas;
     TDF_CHECK_EQ(m_residual.size(), a.covered_count() * kResidualPerTexel);

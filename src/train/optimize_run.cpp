@@ -418,13 +418,16 @@ void resume_from_checkpoint(Trainer& trainer, OptimizeRun& run) {
 }
 
 // The end of the matching phase: the asset as matched (`_initialized`), its quality report (the
-// issue's measure is taken here) and, multi-part, the boundary measure.
-void export_matched(const Trainer& trainer, OptimizeRun& run, const TriangleMesh& export_mesh) {
-    const BakedMaps matched_maps = trainer.export_maps();
+// issue's measure is taken here) and, multi-part, the boundary measure. The asset is written
+// (its height solve is the run's peak at large maps) while the trainer holds only what the
+// refinement cannot rebuild exactly.
+void export_matched(Trainer& trainer, OptimizeRun& run, const TriangleMesh& export_mesh) {
+    trainer.release_derived_state();
+    BakedMaps matched_maps = trainer.export_maps();
     const ExportScale height_scale = asset_export_scale(*run.assets, export_mesh, run.config);  // issue 24
     write_asset(run.options.output_dir, run.name, "_initialized", matched_maps, export_mesh, run.config,
                 run.face_materials, &height_scale);
-    run.matched_albedo = matched_maps.albedo;
+    trainer.restore_derived_state();
     run.end_stage("export_matched");
     const QualityReport matched = trainer.evaluate_held_out();
     Json initialized = {{"quality", matched.to_json()}, {"iteration", trainer.iteration()}};
@@ -438,6 +441,7 @@ void export_matched(const Trainer& trainer, OptimizeRun& run, const TriangleMesh
     run.end_stage("evaluate_matched");
     log_info("after matching: albedo PSNR {:.2f} dB (held-out views, foreground), tactile mean cosine {:.4f}",
              matched.albedo_psnr_foreground, matched.tactile_mean_cosine);
+    run.matched_albedo = std::move(matched_maps.albedo);  // for the final report's spot crops
 }
 
 // The iterations, with checkpoints at phase ends and every checkpoint_every. Returns false when

@@ -1,5 +1,6 @@
 #include <tdf/train/tactile_seam_blend.h>
 
+#include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/tangent_frame.h>
 #include <tdf/mesh/uv_seams.h>
@@ -50,6 +51,7 @@ SeamBlendStats cross_fade_tactile_seams(Image& target, const TexelAtlas& atlas, 
                                         const SurfaceMaterial& material, float band_texels) {
     SeamBlendStats stats;
     if (!(band_texels > 0.0f) || !material.tactile || !mesh.has_uvs() || mesh.tangents.empty()) return stats;
+    TDF_CHECK(atlas.has_target_inputs());
     const std::vector<SharedEdge> edges = shared_edges(mesh);
     const std::vector<int> chart = uv_charts(mesh, edges);
     std::vector<SeamSide> sides;

@@ -74,6 +74,11 @@ TexelAtlas TexelAtlas::build(const TriangleMesh& mesh, int size) {
     return atlas;
 }
 
+void TexelAtlas::release_target_inputs() {
+    raster.barycentric = {};
+    uvs = {};
+}
+
 void TexelAtlas::fill_gutter(Image& map) const {
     TDF_CHECK(map.width() == size && map.height() == size);
     const std::size_t c = std::size_t(map.channels());
@@ -111,6 +116,7 @@ constexpr Vec2f texel_step_y(int size, float scale) { return {0.0f, -scale / flo
 }  // namespace
 
 Image albedo_target(const TexelAtlas& atlas, const SurfaceMaterial& material, const TriangleMesh& mesh) {
+    TDF_CHECK(atlas.has_target_inputs());
     Image map(atlas.size, atlas.size, 3, 0.5f);
     using Source = SurfaceMaterial::AlbedoSource;
     parallel_for(atlas.covered_count(), 4096, [&](std::size_t begin, std::size_t end) {
@@ -144,6 +150,7 @@ Vec3f sample_tactile_layout(const SurfaceMaterial& material, Vec2f uv, Vec2f duv
 }
 
 Image tactile_target(const TexelAtlas& atlas, const SurfaceMaterial& material) {
+    TDF_CHECK(atlas.has_target_inputs());
     Image map(atlas.size, atlas.size, 3, 0.0f);
     for (std::size_t t = 0; t < map.pixel_count(); ++t) map.data()[3 * t + 2] = 1.0f;
     if (material.tactile) {

@@ -82,6 +82,7 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
         }
         m_albedo_target_texture = MipTexture(std::move(albedo_target));
         m_tactile_target_texture = MipTexture(std::move(tactile_target));
+        m_atlas->release_target_inputs();  // the targets are laid: 20 bytes a texel stay behind
         m_maps = std::make_unique<LearnedMaps>(*m_atlas);
         m_texel_charts = atlas_texel_charts(*m_atlas, *target.mesh);
         if (config.albedo_range_radius > 0) {
@@ -226,6 +227,23 @@ Trainer::Phase Trainer::phase_of(int i) const {
 
 void Trainer::release_training_buffers() { m_batch = std::make_unique<Batch>(); }
 
+void Trainer::release_derived_state() {
+    if (!texture_space() || m_derived_released) return;
+    release_training_buffers();
+    m_maps->release_derived();
+    m_albedo_target_texture.drop_levels();
+    m_tactile_target_texture.drop_levels();
+    m_derived_released = true;
+}
+
+void Trainer::restore_derived_state() {
+    if (!m_derived_released) return;
+    m_maps->restore_derived(*m_field, m_config.refine_grid);
+    m_albedo_target_texture.restore_levels();
+    m_tactile_target_texture.restore_levels();
+    m_derived_released = false;
+}
+
 void Trainer::finish_training() {
     release_training_buffers();
     m_residual_adam.reset();
@@ -235,7 +253,7 @@ void Trainer::finish_training() {
 }
 
 LossRecord Trainer::step() {
-    TDF_CHECK(!m_training_finished);
+    TDF_CHECK(!m_training_finished && !m_derived_released);
     const int i = m_iteration;
     if (texture_space() && i < m_config.init_iterations) return fit_maps(i);
     const auto iteration_start = Clock::now();

@@ -53,6 +53,7 @@ void Trainer::evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs
         return;
     }
     if (!m_maps_ready) throw_error("the learned maps exist only after the matching phase");
+    TDF_CHECK(!m_derived_released);  // the maps' mip levels are gone until restore_derived_state()
     const MipTexture& albedo = m_maps->albedo();
     const MipTexture& normal = m_maps->normal();
     parallel_for(hits.size(), kPixelGrain, [&](std::size_t begin, std::size_t end) {

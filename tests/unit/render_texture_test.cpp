@@ -55,6 +55,23 @@ TEST(MipTexture, PyramidIsABoxFilterDownToOneTexel) {
     EXPECT_FLOAT_EQ(tex.level(2).at(0, 0, 1), 1.f);
 }
 
+TEST(MipTexture, DroppedLevelsComeBackBitForBit) {
+    Image img(37, 20, 3);
+    for (std::size_t k = 0; k < img.values().size(); ++k) img.values()[k] = std::sin(0.37f * float(k)) + 0.1f;
+    const MipTexture reference(img);
+    MipTexture tex(img);
+    tex.drop_levels();
+    ASSERT_EQ(tex.level_count(), 1);
+    EXPECT_EQ(tex.level(0).values(), img.values());
+    tex.restore_levels();
+    ASSERT_EQ(tex.level_count(), reference.level_count());
+    for (int k = 0; k < tex.level_count(); ++k) {
+        SCOPED_TRACE(k);
+        EXPECT_EQ(tex.level(k).width(), reference.level(k).width());
+        EXPECT_EQ(tex.level(k).values(), reference.level(k).values());  // vectors of float: exact
+    }
+}
+
 TEST(MipTexture, OddSizesKeepTheMean) {
     Image img(5, 3, 1);
     double sum = 0;

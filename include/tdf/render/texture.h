@@ -52,6 +52,10 @@ public:
     Image& base_level() { return m_levels[0]; }
     /// Levels 1.. from level 0 again, as the constructor and assign() build them.
     void rebuild_levels();
+    /// Frees levels 1.. (a third of the texture) for a step that reads only level 0; until
+    /// restore_levels() brings them back, bit for bit, only level(0) may be read.
+    void drop_levels();
+    void restore_levels();
 
     /// Bilinear lookup on level 0; writes channels() floats to `out`.
     void sample_bilinear(Vec2f uv, float* out) const;

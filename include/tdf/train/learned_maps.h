@@ -45,6 +45,12 @@ public:
     /// Frees what only update() and the optimizer read (the residual, the field's outputs, the
     /// bounds) once training is over; albedo() and normal() stay, update() refuses.
     void release_training_state();
+    /// Frees what the field and the maps' level 0 give back bit for bit (the field's outputs at
+    /// the texels and their encodings, the maps' levels above 0: 0.8 GB at 4096^2 maps) for a
+    /// memory-heavy step between iterations, such as the export after matching. Until
+    /// restore_derived() (same field parameters) only level 0 of albedo() and normal() may be read.
+    void release_derived();
+    void restore_derived(const TextureField& field, bool keep_encodings);
 
     const MipTexture& albedo() const { return m_albedo; }
     const MipTexture& normal() const { return m_normal; }

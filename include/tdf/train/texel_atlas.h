@@ -42,6 +42,11 @@ struct TexelAtlas {
     /// The adjoint of fill_gutter: adds each gutter texel's gradient to its source texel and
     /// zeroes it. Serial over texels (deterministic); cheap (one pass).
     void fold_gutter_gradient(Image& gradient) const;
+    /// Frees what only laying the targets over the atlas reads (the raster's barycentrics and the
+    /// texels' UVs: 20 bytes a texel, 0.3 GB at 4096^2), once they are laid; albedo_target(),
+    /// tactile_target() and cross_fade_tactile_seams() refuse the atlas from then on.
+    void release_target_inputs();
+    bool has_target_inputs() const { return uvs.size() == texels.size() && !raster.barycentric.empty(); }
 };
 
 /// The base albedo over the atlas: the material's texture sampled trilinearly at each texel's UV

@@ -162,6 +162,13 @@ public:
     /// maps stay for export_maps(), evaluate_held_out() and the measures; step(), parameters()
     /// and checkpoints refuse from then on.
     void finish_training();
+    /// Between iterations, for a memory-heavy step that reads only export_maps() and the targets'
+    /// level 0 (the export after matching): frees the per-iteration buffers and what the field
+    /// and level 0 give back bit for bit (texture evaluation: the field's outputs at the texels,
+    /// the mip levels above 0 of the maps and targets: 1.1 GB at 4096^2 maps). step() and
+    /// evaluate_held_out() refuse until restore_derived_state() has rebuilt them.
+    void release_derived_state();
+    void restore_derived_state();
 
     /// Iteration `i`'s losses and their gradient with respect to parameters(), without changing
     /// anything (for finite-difference checks of the whole trainer). Guidance targets count as
@@ -288,6 +295,7 @@ private:
     bool m_map_gradients_unstepped = false;  // Batch's map gradients are backward()'s, not yet stepped on
     bool m_maps_ready = false;
     bool m_training_finished = false;  // finish_training() ran
+    bool m_derived_released = false;   // release_derived_state() ran, restore_derived_state() not yet
     // Multi-part.
     std::unique_ptr<PartLabelHead> m_label_head;
     std::unique_ptr<Adam> m_label_adam;
