@@ -480,7 +480,15 @@ void write_image(const std::string& path, const Image& image, int png_bits, Quan
 
 namespace {
 
-void write_exr_file(const std::string& path, const std::vector<ExrLayer>& layers, ExrPixelType type,
+// A layer to write, by reference: the images are not copied (a 4096^2 RGB float map is 201 MB,
+// and an initializer list of ExrLayer copied it twice).
+struct ExrLayerView {
+    const std::string& name;
+    const std::vector<std::string>& channel_names;
+    const Image& image;
+};
+
+void write_exr_file(const std::string& path, const std::vector<ExrLayerView>& layers, ExrPixelType type,
                     const ImageMetadata& metadata) {
     check_output_extension(path, {".exr"}, "an OpenEXR file");
     if (layers.empty()) throw_error("cannot write EXR '{}': no layers", path);
@@ -534,15 +542,20 @@ void write_exr_file(const std::string& path, const std::vector<ExrLayer>& layers
 }  // namespace
 
 void write_exr(const std::string& path, const std::vector<ExrLayer>& layers, ExrPixelType type) {
-    write_exr_file(path, layers, type, ImageMetadata{});
+    std::vector<ExrLayerView> views;
+    views.reserve(layers.size());
+    for (const ExrLayer& layer : layers) views.push_back({layer.name, layer.channel_names, layer.image});
+    write_exr_file(path, views, type, ImageMetadata{});
 }
 
 void write_exr(const std::string& path, const Image& image, ExrPixelType type) {
-    write_exr(path, {ExrLayer{"", default_channel_names(image.channels()), image}}, type);
+    write_exr(path, image, ImageMetadata{}, type);
 }
 
 void write_exr(const std::string& path, const Image& image, const ImageMetadata& metadata, ExrPixelType type) {
-    write_exr_file(path, {ExrLayer{"", default_channel_names(image.channels()), image}}, type, metadata);
+    const std::string no_name;
+    const std::vector<std::string> channel_names = default_channel_names(image.channels());
+    write_exr_file(path, {ExrLayerView{no_name, channel_names, image}}, type, metadata);
 }
 
 namespace {
