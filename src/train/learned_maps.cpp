@@ -74,6 +74,10 @@ void LearnedMaps::release_derived() {
 void LearnedMaps::restore_derived(const TextureField& field, bool keep_encodings) {
     m_field_outputs.resize(m_atlas->covered_count());
     evaluate_field(field, keep_encodings);
+    restore_levels();
+}
+
+void LearnedMaps::restore_levels() {
     m_albedo.restore_levels();
     m_normal.restore_levels();
 }

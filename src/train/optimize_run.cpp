@@ -520,10 +520,12 @@ void export_final(Trainer& trainer, OptimizeRun& run, const ProgressReporter& pr
                   const TriangleMesh& export_mesh) {
     const RunConfig& config = run.config;
     trainer.finish_training();
+    trainer.release_derived_state();  // the mip levels, while the asset is written (as after matching)
     const BakedMaps maps = trainer.export_maps();
     const ExportScale height_scale = asset_export_scale(*run.assets, export_mesh, config);  // issue 24
     const Json height_json =
         write_asset(run.options.output_dir, run.name, "", maps, export_mesh, config, run.face_materials, &height_scale);
+    trainer.restore_derived_state();
     run.end_stage("export");
     const QualityReport quality = trainer.evaluate_held_out();
     run.end_stage("evaluate");

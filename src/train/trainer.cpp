@@ -85,13 +85,7 @@ Trainer::Trainer(const TrainingTarget& target, const RunConfig& config, std::uin
         m_atlas->release_target_inputs();  // the targets are laid: 20 bytes a texel stay behind
         m_maps = std::make_unique<LearnedMaps>(*m_atlas);
         m_texel_charts = atlas_texel_charts(*m_atlas, *target.mesh);
-        if (config.albedo_range_radius > 0) {
-            // The refinement's colour bound (issue 29): the input's local range, widened.
-            ColourRange bound = local_colour_range(this->albedo_target(), m_texel_charts, config.albedo_range_radius);
-            for (float& v : bound.low.values()) v -= config.albedo_range_darken;
-            for (float& v : bound.high.values()) v += config.albedo_range_lighten;
-            m_maps->set_albedo_bounds(std::move(bound.low), std::move(bound.high));
-        }
+        set_albedo_bounds();
         // Adam state for the residual only when it is Adam's to update (the Jacobi step has none).
         if (config.residual_optimizer == "adam")
             m_residual_adam = std::make_unique<Adam>(m_maps->residual().size(), hyper);
@@ -227,10 +221,21 @@ Trainer::Phase Trainer::phase_of(int i) const {
 
 void Trainer::release_training_buffers() { m_batch = std::make_unique<Batch>(); }
 
+void Trainer::set_albedo_bounds() {
+    const RunConfig& config = m_config;
+    if (config.albedo_range_radius <= 0) return;
+    // The refinement's colour bound (issue 29): the input's local range, widened.
+    ColourRange bound = local_colour_range(albedo_target(), m_texel_charts, config.albedo_range_radius);
+    for (float& v : bound.low.values()) v -= config.albedo_range_darken;
+    for (float& v : bound.high.values()) v += config.albedo_range_lighten;
+    m_maps->set_albedo_bounds(std::move(bound.low), std::move(bound.high));
+}
+
 void Trainer::release_derived_state() {
     if (!texture_space() || m_derived_released) return;
     release_training_buffers();
     m_maps->release_derived();
+    m_maps->set_albedo_bounds(Image(), Image());  // recomputed from the input by restore_derived_state()
     m_albedo_target_texture.drop_levels();
     m_tactile_target_texture.drop_levels();
     m_derived_released = true;
@@ -238,7 +243,12 @@ void Trainer::release_derived_state() {
 
 void Trainer::restore_derived_state() {
     if (!m_derived_released) return;
-    m_maps->restore_derived(*m_field, m_config.refine_grid);
+    if (m_training_finished) {
+        m_maps->restore_levels();  // the outputs and bounds left with finish_training()
+    } else {
+        m_maps->restore_derived(*m_field, m_config.refine_grid);
+        set_albedo_bounds();
+    }
     m_albedo_target_texture.restore_levels();
     m_tactile_target_texture.restore_levels();
     m_derived_released = false;

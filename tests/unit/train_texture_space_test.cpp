@@ -273,7 +273,10 @@ TEST(TextureSpace, WholeTrainerGradientMatchesFiniteDifferences) {
 TEST(TextureSpace, ReleasingTheDerivedStateChangesNoBit) {
     for (const char* refine_grid : {"field.refine_grid=false", "field.refine_grid=true"}) {
         SCOPED_TRACE(refine_grid);
-        const std::vector<std::string> overrides = {"optimize.iterations=10", "optimize.init_iterations=6", refine_grid};
+        // A colour bound with no tolerance, so that the refinement presses on it (the bound is
+        // released too, and must come back the same).
+        const std::vector<std::string> overrides = {"optimize.iterations=10", "optimize.init_iterations=6", refine_grid,
+                                                    "optimize.albedo_range_lighten=0", "optimize.albedo_range_darken=0"};
         TrainingRun plain = make_run(overrides, "relief_shading", 128);
         TrainingRun released = make_run(overrides, "relief_shading", 128);
         for (TrainingRun* run : {&plain, &released})
@@ -290,6 +293,16 @@ TEST(TextureSpace, ReleasingTheDerivedStateChangesNoBit) {
         const BakedMaps a = plain.trainer->export_maps(), b = released.trainer->export_maps();
         EXPECT_EQ(a.albedo.values(), b.albedo.values());
         EXPECT_EQ(a.tactile_normal.values(), b.tactile_normal.values());
+        // The final export releases the levels after finish_training() and rebuilds only them.
+        plain.trainer->finish_training();
+        released.trainer->finish_training();
+        released.trainer->release_derived_state();
+        EXPECT_EQ(released.trainer->export_maps().albedo.values(), a.albedo.values());
+        released.trainer->restore_derived_state();
+        EXPECT_EQ(released.trainer->evaluate_held_out().albedo_psnr_foreground,
+                  plain.trainer->evaluate_held_out().albedo_psnr_foreground);
+        EXPECT_EQ(released.trainer->evaluate_held_out().tactile_mean_cosine,
+                  plain.trainer->evaluate_held_out().tactile_mean_cosine);
     }
 }
 

@@ -51,6 +51,8 @@ public:
     /// restore_derived() (same field parameters) only level 0 of albedo() and normal() may be read.
     void release_derived();
     void restore_derived(const TextureField& field, bool keep_encodings);
+    /// Only the maps' levels (after release_training_state(), there are no outputs to restore).
+    void restore_levels();
 
     const MipTexture& albedo() const { return m_albedo; }
     const MipTexture& normal() const { return m_normal; }

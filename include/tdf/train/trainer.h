@@ -163,10 +163,12 @@ public:
     /// and checkpoints refuse from then on.
     void finish_training();
     /// Between iterations, for a memory-heavy step that reads only export_maps() and the targets'
-    /// level 0 (the export after matching): frees the per-iteration buffers and what the field
-    /// and level 0 give back bit for bit (texture evaluation: the field's outputs at the texels,
-    /// the mip levels above 0 of the maps and targets: 1.1 GB at 4096^2 maps). step() and
-    /// evaluate_held_out() refuse until restore_derived_state() has rebuilt them.
+    /// level 0 (the export after matching): frees the per-iteration buffers and what the field,
+    /// the input and level 0 give back bit for bit (texture evaluation: the field's outputs at the
+    /// texels, the colour bounds, the mip levels above 0 of the maps and targets: 1.5 GB at 4096^2
+    /// maps). step() and
+    /// evaluate_held_out() refuse until restore_derived_state() has rebuilt them. After
+    /// finish_training() only the mip levels are released and rebuilt (the final export).
     void release_derived_state();
     void restore_derived_state();
 
@@ -262,6 +264,9 @@ private:
     /// Texture evaluation: makes the maps equal the targets (r = target - grid) once the grid fit
     /// is over, and refreshes them after every update.
     void prepare_maps();
+    /// Texture evaluation: the maps' colour bound from the input albedo (issue 29), none when
+    /// optimize.albedo_range_radius is 0.
+    void set_albedo_bounds();
     /// The surface at pixels of a traced view: the field at the hits (pixel evaluation) or the
     /// learned maps sampled there (texture evaluation), in pixel order of the hits.
     void evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs) const;
