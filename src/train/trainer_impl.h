@@ -87,6 +87,7 @@ struct Trainer::Batch {
     // Which view and pixel each hit came from (texture evaluation looks the maps up there).
     std::vector<std::uint32_t> hit_pixel;
     std::vector<std::uint16_t> hit_view;
+    std::vector<std::size_t> chunk_hits;  // trace_views: the first hit of each chunk of pixels
     // Texture evaluation: each hit's lookup and its unnormalised normal; the map gradients.
     std::vector<Vec2f> lookup_uv;
     std::vector<float> lookup_lod;

@@ -53,21 +53,46 @@ void Trainer::trace_views(std::size_t first, std::size_t last) {
     b.patch_hit_count = 0;
     b.hit_pixel.clear();
     b.hit_view.clear();
+    // The hits in pixel order, view after view: each chunk of pixels counts its hits, a prefix sum
+    // over the chunks places them, and the chunks fill their places in parallel (2 M pixels an
+    // iteration; the same lists as one pass in order).
+    constexpr std::size_t kChunk = 1 << 14;
     for (std::size_t k = first; k < last; ++k) {
         if (k == patches) b.patch_hit_count = b.hit_pixel.size();
         const GBuffer& g = b.gbuffers[k];
         std::vector<int>& point_of = b.point_of[k];
         point_of.resize(g.pixel_count());
-        for (std::size_t p = 0; p < g.pixel_count(); ++p) {
-            if (g.mask[p] > 0.0f) {
-                point_of[p] = int(b.hit_pixel.size());
-                if (!texture_space()) b.points.push_back(g.position[p]);  // the field's inputs
-                b.hit_pixel.push_back(std::uint32_t(p));
-                b.hit_view.push_back(std::uint16_t(k));
-            } else {
-                point_of[p] = -1;
+        const std::size_t chunks = chunk_count(g.pixel_count(), kChunk);
+        b.chunk_hits.assign(chunks + 1, 0);
+        parallel_for(chunks, 1, [&](std::size_t c_begin, std::size_t c_end) {
+            for (std::size_t c = c_begin; c < c_end; ++c) {
+                std::size_t hits = 0;
+                for (std::size_t p = c * kChunk, end = std::min(g.pixel_count(), p + kChunk); p < end; ++p)
+                    hits += g.mask[p] > 0.0f;
+                b.chunk_hits[c + 1] = hits;
             }
-        }
+        });
+        b.chunk_hits[0] = b.hit_pixel.size();
+        for (std::size_t c = 0; c < chunks; ++c) b.chunk_hits[c + 1] += b.chunk_hits[c];
+        b.hit_pixel.resize(b.chunk_hits[chunks]);
+        b.hit_view.resize(b.chunk_hits[chunks]);
+        if (!texture_space()) b.points.resize(b.chunk_hits[chunks]);  // the field's inputs
+        parallel_for(chunks, 1, [&](std::size_t c_begin, std::size_t c_end) {
+            for (std::size_t c = c_begin; c < c_end; ++c) {
+                std::size_t q = b.chunk_hits[c];
+                for (std::size_t p = c * kChunk, end = std::min(g.pixel_count(), p + kChunk); p < end; ++p) {
+                    if (!(g.mask[p] > 0.0f)) {
+                        point_of[p] = -1;
+                        continue;
+                    }
+                    point_of[p] = int(q);
+                    if (!texture_space()) b.points[q] = g.position[p];
+                    b.hit_pixel[q] = std::uint32_t(p);
+                    b.hit_view[q] = std::uint16_t(k);
+                    ++q;
+                }
+            }
+        });
     }
     if (last <= patches) b.patch_hit_count = b.hit_pixel.size();
 }
@@ -77,8 +102,8 @@ void Trainer::evaluate_surface(bool with_view_normals) {
     Batch& b = *m_batch;
     const std::size_t n = b.hit_pixel.size();
     b.outputs.resize(n);
-    b.grads.assign(n, FieldOutputGrads{});
     if (!texture_space()) {
+        b.grads.assign(n, FieldOutputGrads{});
         m_field->evaluate(b.points.data(), n, b.outputs.data(), b.field_cache);
         return;
     }
@@ -88,12 +113,15 @@ void Trainer::evaluate_surface(bool with_view_normals) {
     b.lookup_lod.resize(n);
     b.raw_normal.resize(n);
     b.target.resize(n);
-    b.curvature.assign(n, 0.0f);
+    b.grads.resize(n);  // zeroed below, per hit, in parallel
+    b.curvature.resize(n);
     parallel_for(n, kPixelGrain, [&](std::size_t begin, std::size_t end) {
         TrilinearTaps taps;
         for (std::size_t q = begin; q < end; ++q) {
             const GBuffer& g = b.gbuffers[b.hit_view[q]];
             const std::size_t p = b.hit_pixel[q];
+            b.grads[q] = FieldOutputGrads{};
+            b.curvature[q] = 0.0f;
             // Both maps have the atlas's size, so one LOD serves both (spec 3.7).
             const float lod = albedo.level_of_detail(g.duv_dx[p], g.duv_dy[p]);
             b.lookup_uv[q] = g.uv[p];

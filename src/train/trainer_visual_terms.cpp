@@ -68,17 +68,18 @@ void Trainer::render_visual_views(bool visual_guidance, GuidanceImages& guidance
         const bool resized = g.width != S || g.height != S;
         // Renders composited on white at the internal size, then resized to S x S (spec 3.8).
         const auto render_internal = [&](auto&& colour_of_hit, float* out) {
-            if (b.internal.width() != g.width || b.internal.height() != g.height) b.internal = Image(g.width, g.height, 3);
-            std::fill(b.internal.values().begin(), b.internal.values().end(), 1.0f);  // white background
+            // Without SSAA the internal size is the output size: rendered in place.
+            if (resized && (b.internal.width() != g.width || b.internal.height() != g.height))
+                b.internal = Image(g.width, g.height, 3);
+            float* image = resized ? b.internal.data() : out;
             parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
                 for (std::size_t p = begin; p < end; ++p) {
                     const int q = point_of[p];
-                    if (q < 0) continue;
-                    const Vec3f c = colour_of_hit(p, std::size_t(q));
-                    std::copy(&c.x, &c.x + 3, b.internal.data() + 3 * p);
+                    const Vec3f c = q < 0 ? Vec3f{1.0f, 1.0f, 1.0f} : colour_of_hit(p, std::size_t(q));  // white background
+                    std::copy(&c.x, &c.x + 3, image + 3 * p);
                 }
             });
-            copy_into(resized ? resize_bilinear(b.internal, S, S) : b.internal, out);
+            if (resized) copy_into(resize_bilinear(b.internal, S, S), out);
         };
         float* pred = b.albedo_pred.data() + std::size_t(k) * view_values;
         render_internal([&](std::size_t, std::size_t q) { return b.outputs[q].albedo; }, pred);
