@@ -84,7 +84,7 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
         c.schedule = schedule.get<std::string>();
         if (c.schedule == "reference") {
             c.evaluation = FieldEvaluation::Pixel;
-            c.iterations = 200;
+            c.iterations = 200;  // 150 + 50
             c.init_iterations = 150;
             c.visual_guidance_loss = "l1_structural";
             c.weights.albedo_refine = 500.0f;
