@@ -4,6 +4,7 @@
 #include <tbb/blocked_range2d.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 #include <tbb/task_arena.h>
 
 #include <cstdlib>
@@ -43,6 +44,12 @@ void parallel_for(std::size_t count, std::size_t grain,
     if (count == 0) return;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, grain == 0 ? 1 : grain),
                       [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+}
+
+void parallel_tasks(const std::vector<std::function<void()>>& tasks) {
+    tbb::task_group group;
+    for (const auto& task : tasks) group.run([&task] { task(); });
+    group.wait();
 }
 
 void parallel_for_tiles(int width, int height, int tile,

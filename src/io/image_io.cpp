@@ -2,6 +2,7 @@
 
 #include <tdf/core/atomic_file.h>
 #include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
 
 #include <ImfChannelList.h>
 #include <Imath/half.h>
@@ -12,6 +13,7 @@
 #include <ImfCompression.h>
 #include <ImfStringAttribute.h>
 #include <Iex.h>
+#include <ImfThreading.h>
 #include <jpeglib.h>
 #include <png.h>
 
@@ -32,6 +34,17 @@ std::string lower_extension(const std::string& path) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     return ext;
 }
+
+namespace {
+// OpenEXR compresses and decompresses the blocks of scan lines on its own thread pool, sized to
+// the threads tdf's loops may use (ThreadLimit): the blocks' bytes do not depend on it, so files
+// are the same on any thread count.
+int exr_threads() {
+    const int threads = std::max(1, ThreadLimit::current());
+    if (Imf::globalThreadCount() != threads) Imf::setGlobalThreadCount(threads);
+    return threads;
+}
+}  // namespace
 
 namespace {
 
@@ -530,7 +543,7 @@ void write_exr_file(const std::string& path, const std::vector<ExrLayerView>& la
                                                   element * y_stride));
                 }
             }
-            Imf::OutputFile file(tmp.c_str(), header);
+            Imf::OutputFile file(tmp.c_str(), header, exr_threads());
             file.setFrameBuffer(frame);
             file.writePixels(height);
         } catch (const std::exception& e) {
@@ -741,7 +754,7 @@ std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* me
             return true;
         }();
         (void)limited;
-        Imf::InputFile file(path.c_str());
+        Imf::InputFile file(path.c_str(), exr_threads());
         const Imath::Box2i window = file.header().dataWindow();
         if (metadata)
             for (auto it = file.header().begin(); it != file.header().end(); ++it)

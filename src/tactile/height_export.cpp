@@ -11,6 +11,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <vector>
 
 namespace tdf {
 
@@ -167,9 +169,13 @@ ExportedHeight export_height(const Image& normals, const ExportScale& scale, con
 }
 
 void write_exported_height(const std::string& base, const ExportedHeight& height) {
-    write_height_map(base + "_height.exr", height.map);
-    write_height_preview_png(base + "_height.png", height.map);
-    if (!height.occlusion.empty()) write_png(base + "_ao.png", height.occlusion, 8, Quantize::Round);
+    // Three independent files, each encoded on one thread: side by side.
+    std::vector<std::function<void()>> writes = {
+        [&] { write_height_map(base + "_height.exr", height.map); },
+        [&] { write_height_preview_png(base + "_height.png", height.map); }};
+    if (!height.occlusion.empty())
+        writes.push_back([&] { write_png(base + "_ao.png", height.occlusion, 8, Quantize::Round); });
+    parallel_tasks(writes);
 }
 
 Json exported_height_json(const ExportedHeight& height, const ExportScale& scale, const std::string& png_name,

@@ -15,6 +15,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <functional>
+#include <vector>
 
 namespace tdf {
 
@@ -46,16 +48,21 @@ Json write_asset(const std::string& folder, const std::string& name, const std::
     // The albedo is stored as it is rendered and trained (the input's own values, sRGB-encoded
     // for a texture): exactly what glTF's baseColorTexture and an OBJ's map_Kd hold.
     const std::string albedo_png = base + "_albedo.png", normal_png = base + "_tactile_normal.png";
-    write_png(albedo_png, maps.albedo, 8, Quantize::Truncate);
-    write_png(normal_png, encode_normal_map(maps.tactile_normal), 8, Quantize::Truncate);
-    if (config.write_exr) {
-        write_exr(base + "_albedo.exr", maps.albedo, ExrPixelType::Float);
-        write_exr(base + "_tactile_normal.exr", maps.tactile_normal, ExrPixelType::Float);
-    }
     ObjMaterial material;
     material.name = "defaultMat";
     material.albedo_map = stem + "_albedo.png";
     material.normal_map = stem + "_tactile_normal.png";
+    // The map files are independent, and libpng's deflate runs on one thread: written side by side
+    // they keep both cores busy (each file still written atomically). The height solve, parallel
+    // itself and the export's memory peak (docs/measurements.md, 4096^2), runs after them.
+    std::vector<std::function<void()>> writes = {
+        [&] { write_png(albedo_png, maps.albedo, 8, Quantize::Truncate); },
+        [&] { write_png(normal_png, encode_normal_map(maps.tactile_normal), 8, Quantize::Truncate); }};
+    if (config.write_exr) {
+        writes.push_back([&] { write_exr(base + "_albedo.exr", maps.albedo, ExrPixelType::Float); });
+        writes.push_back([&] { write_exr(base + "_tactile_normal.exr", maps.tactile_normal, ExrPixelType::Float); });
+    }
+    parallel_tasks(writes);
     Json height_json;
     bool wrote_occlusion = false;
     if (height_scale && height_scale->mm_per_texel > 0) {

@@ -6,6 +6,7 @@
 /// never by the thread count, so results are bit-identical on 1 and N threads.
 #include <cstddef>
 #include <functional>
+#include <vector>
 #include <memory>
 
 namespace tdf {
@@ -34,6 +35,10 @@ void parallel_for(std::size_t count, std::size_t grain,
 /// Calls `body(x0, y0, x1, y1)` for each `tile` x `tile` tile of a width x height image.
 void parallel_for_tiles(int width, int height, int tile,
                         const std::function<void(int x0, int y0, int x1, int y1)>& body);
+
+/// Runs the independent `tasks` side by side (each may use parallel loops of its own) and returns
+/// when all have finished; the first exception thrown by a task is rethrown.
+void parallel_tasks(const std::vector<std::function<void()>>& tasks);
 
 /// Number of fixed-size chunks [i*chunk, min((i+1)*chunk, count)) covering [0, count).
 inline std::size_t chunk_count(std::size_t count, std::size_t chunk) {
