@@ -1,5 +1,6 @@
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/core/streaming_copy.h>
 #include <tdf/render/material_sampling.h>
 #include <tdf/render/raster.h>
 #include <tdf/render/renderer.h>
@@ -88,17 +89,19 @@ struct Targets {
         return t;
     }
 
-    // Copies tile `t` (w x h, pixel (0, 0) at image pixel (x0, y0)) into these images.
+    // Copies tile `t` (w x h, pixel (0, 0) at image pixel (x0, y0)) into these images. The frame
+    // is not read again while it is rendered, so the rows bypass the cache (copy_streaming).
     void flush(const Targets& t, int image_width, int x0, int y0, int w, int h) const {
         const auto copy = [&](float* image, const float* tile, std::size_t c) {
             for (int r = 0; r < h; ++r)
-                std::copy_n(tile + std::size_t(r) * std::size_t(w) * c,
-                            std::size_t(w) * c,
-                            image + (std::size_t(y0 + r) * std::size_t(image_width) + std::size_t(x0)) * c);
+                copy_streaming(tile + std::size_t(r) * std::size_t(w) * c,
+                               std::size_t(w) * c,
+                               image + (std::size_t(y0 + r) * std::size_t(image_width) + std::size_t(x0)) * c);
         };
         copy(coverage, t.coverage, 1);
         for (std::size_t p = 0; p < kPassCount; ++p)
             if (base[p]) copy(base[p], t.base[p], std::size_t(channels[p]));
+        streaming_fence();
     }
 };
 
@@ -177,35 +180,57 @@ public:
         static thread_local ShadeLanes lanes;  // per thread, reused: no allocation per tile
         fill_lanes(g, lanes);
         if (m_need_frame) shade_lanes(lanes, m_lane_constants);
-        for (std::size_t i = 0; i < g.pixel_count(); ++i)
-            if (g.mask[i] > 0.f)
-                shade_hit(g, i, lanes, out);
-            else
-                shade_miss(g, i, out);
+        write_passes(g, lanes, out);
     }
 
 private:
-    // The passes that are G-buffer attributes as they are (zeros on the background).
-    static void copy_gbuffer_passes(const GBuffer& g, std::size_t i, const Targets& out) {
-        const std::size_t px = i;
-        out.coverage[px] = g.mask[i];
-        if (float* o = out.at(Pass::Mask, px)) o[0] = g.mask[i];
-        if (float* o = out.at(Pass::Depth, px)) o[0] = g.depth[i];
-        if (float* o = out.at(Pass::Normal, px)) put3(o, g.normal[i]);
-        if (float* o = out.at(Pass::Tangent, px)) put3(o, g.tangent[i]);
-    }
-
-    // Background: the G-buffer's zeros, and the background colour where it is composited.
-    void shade_miss(const GBuffer& g, std::size_t i, const Targets& out) const {
-        const std::size_t px = i;
-        copy_gbuffer_passes(g, i, out);
-        if (float* o = out.at(Pass::Uv, px)) o[0] = o[1] = 0.f;
-        if (float* o = out.at(Pass::Label, px)) put3(o, {});
-        if (float* o = out.at(Pass::Albedo, px)) put3(o, m_background);
+    // The passes one at a time over the whole tile: each pass is one contiguous stream, and the
+    // choice of passes is made once a tile, not once a pixel. Background pixels get the G-buffer's
+    // zeros, and the background colour where it is composited.
+    void write_passes(const GBuffer& g, const ShadeLanes& l, const Targets& out) const {
+        const std::size_t n = g.pixel_count();
+        const float* mask = g.mask.data();
+        const auto pass = [&](Pass p) { return out.base[std::size_t(p)]; };
+        // Vec3f is three packed floats, so a G-buffer vector is the pass's pixels as they are.
+        static_assert(sizeof(Vec3f) == 3 * sizeof(float));
+        const auto copy3 = [n](const Vec3f* from, float* to) {
+            std::copy_n(reinterpret_cast<const float*>(from), 3 * n, to);
+        };
+        // Lanes whose pixel missed hold whatever shading computed from zeros: write zeros there.
+        const auto hits3 = [&](const float* x, const float* y, const float* z, float* to) {
+            for (std::size_t i = 0; i < n; ++i) {
+                const bool hit = mask[i] > 0.f;
+                to[3 * i] = hit ? x[i] : 0.f, to[3 * i + 1] = hit ? y[i] : 0.f, to[3 * i + 2] = hit ? z[i] : 0.f;
+            }
+        };
+        std::copy_n(mask, n, out.coverage);
+        if (float* o = pass(Pass::Mask)) std::copy_n(mask, n, o);
+        if (float* o = pass(Pass::Depth)) std::copy_n(g.depth.data(), n, o);
+        if (float* o = pass(Pass::Normal)) copy3(g.normal.data(), o);
+        if (float* o = pass(Pass::Tangent)) copy3(g.tangent.data(), o);
+        if (float* o = pass(Pass::Uv))
+            for (std::size_t i = 0; i < n; ++i) {
+                const bool hit = mask[i] > 0.f;
+                o[2 * i] = hit ? g.uv[i].x : 0.f;
+                o[2 * i + 1] = hit ? 1.f - g.uv[i].y : 0.f;  // the reference's v' (spec 3.9)
+            }
+        if (float* o = pass(Pass::Label))
+            for (std::size_t i = 0; i < n; ++i) {
+                Vec3f label;
+                if (mask[i] > 0.f && m_mat.label) {
+                    PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
+                    label = sample_rgb(*m_mat.label, g.uv[i], lod, true, m_tactile_max_level);
+                }
+                put3(o + 3 * i, label);
+            }
+        if (float* o = pass(Pass::Albedo)) copy3(l.albedo, o);  // misses hold the background (fill_lanes)
         if (!m_need_frame) return;
-        for (Pass p : {Pass::TactileNormal, Pass::ShadingNormal, Pass::ShadingNormalViewspace})
-            if (float* o = out.at(p, px)) put3(o, {});
-        if (float* o = out.at(Pass::Lambertian, px)) put3(o, m_background);
+        if (float* o = pass(Pass::TactileNormal)) hits3(l.tnx, l.tny, l.tnz, o);
+        if (float* o = pass(Pass::ShadingNormal)) hits3(l.snx, l.sny, l.snz, o);
+        if (float* o = pass(Pass::ShadingNormalViewspace)) hits3(l.vx, l.vy, l.vz, o);
+        if (float* o = pass(Pass::Lambertian))
+            for (std::size_t i = 0; i < n; ++i)
+                put3(o + 3 * i, mask[i] > 0.f ? lit_color(l.albedo[i], l.shade[i], m_color_space) : m_background);
     }
 
     // The albedo and the (unnormalised) tangent-space tactile normal of hit pixel i. With an
@@ -257,25 +282,6 @@ private:
             l.w[i] = g.handedness[i];
             l.qx[i] = g.position[i].x, l.qy[i] = g.position[i].y, l.qz[i] = g.position[i].z;
         }
-    }
-
-    void shade_hit(const GBuffer& g, std::size_t i, const ShadeLanes& l, const Targets& out) const {
-        const std::size_t px = i;
-        copy_gbuffer_passes(g, i, out);
-        if (float* o = out.at(Pass::Uv, px)) {
-            o[0] = g.uv[i].x;
-            o[1] = 1.f - g.uv[i].y;  // the reference's v' (spec 3.9)
-        }
-        if (float* o = out.at(Pass::Label, px)) {
-            PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
-            put3(o, m_mat.label ? sample_rgb(*m_mat.label, g.uv[i], lod, true, m_tactile_max_level) : Vec3f{});
-        }
-        if (float* o = out.at(Pass::Albedo, px)) put3(o, l.albedo[i]);
-        if (!m_need_frame) return;
-        if (float* o = out.at(Pass::TactileNormal, px)) put3(o, {l.tnx[i], l.tny[i], l.tnz[i]});
-        if (float* o = out.at(Pass::ShadingNormal, px)) put3(o, {l.snx[i], l.sny[i], l.snz[i]});
-        if (float* o = out.at(Pass::ShadingNormalViewspace, px)) put3(o, {l.vx[i], l.vy[i], l.vz[i]});
-        if (float* o = out.at(Pass::Lambertian, px)) put3(o, lit_color(l.albedo[i], l.shade[i], m_color_space));
     }
 
     const TriangleMesh& m_mesh;
