@@ -265,14 +265,36 @@ private:
         }
     }
 
-    // The lanes' inputs: the G-buffer's frame and position, and the texture lookups of the hits.
+    // The texels of a tile's paired lookups (sample_trilinear_pairs).
+    struct TilePairs {
+        float lod[ShadeLanes::kMax];
+        float albedo[ShadeLanes::kMax * kMaxTextureChannels];
+        float tactile[ShadeLanes::kMax * kMaxTextureChannels];
+    };
+
+    // The lanes' inputs: the G-buffer's frame and position, and the texture lookups of the hits
+    // (with paired maps, the whole tile's at once).
     void fill_lanes(const GBuffer& g, ShadeLanes& l) const {
-        l.count = int(g.pixel_count());
-        for (std::size_t i = 0; i < g.pixel_count(); ++i) {
+        const std::size_t n = g.pixel_count();
+        l.count = int(n);
+        const bool pairs = m_paired_maps && m_need_albedo && m_need_frame;
+        static thread_local TilePairs tile;
+        if (pairs)
+            m_mat.albedo->sample_trilinear_pairs(*m_mat.tactile, n, g.mask.data(), g.uv.data(), g.duv_dx.data(),
+                                                 g.duv_dy.data(), tile.lod, tile.albedo, tile.tactile, -1);
+        const std::size_t ca = std::size_t(m_mat.albedo ? m_mat.albedo->channels() : 0);
+        const std::size_t ct = std::size_t(m_mat.tactile ? m_mat.tactile->channels() : 0);
+        for (std::size_t i = 0; i < n; ++i) {
             Vec3f albedo = m_background, p{0, 0, 1};
             if (g.mask[i] > 0.f) {
-                PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
-                sample_maps(g, i, lod, albedo, p);
+                if (pairs) {
+                    albedo = texel_rgb(*m_mat.albedo, tile.albedo + ca * i);
+                    const float* t = tile.tactile + ct * i;
+                    p = {t[0], t[1], t[2]};
+                } else {
+                    PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
+                    sample_maps(g, i, lod, albedo, p);
+                }
             }
             l.albedo[i] = albedo;
             if (!m_need_frame) continue;

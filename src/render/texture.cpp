@@ -12,7 +12,7 @@ namespace tdf {
 namespace {
 // The footprint of a lookup at uv: texel centres at (k + 0.5) / size, v up, wrap addressing (one
 // addressing for lookups and their taps).
-inline BilinearFootprint wrapped_footprint(const Image& img, Vec2f uv) {
+TDF_FORCE_INLINE BilinearFootprint wrapped_footprint(const Image& img, Vec2f uv) {
     const TexelPoint t = uv_to_texel(uv.x, uv.y, img.width(), img.height());
     return bilinear_footprint(t.x, t.y, img.width(), img.height(), Addressing::Wrap);
 }
@@ -68,7 +68,7 @@ TDF_FORCE_INLINE void blend_level(const Image& img, const BilinearFootprint& f, 
 }
 
 // The trilinear blend: level l0 already in `out`, level l0 + 1 in `next`.
-inline void lerp_levels(int channels, float frac, const float* next, float* out) {
+TDF_FORCE_INLINE void lerp_levels(int channels, float frac, const float* next, float* out) {
     for (int k = 0; k < channels; ++k) out[k] += frac * (next[k] - out[k]);
 }
 }  // namespace
@@ -80,15 +80,22 @@ void MipTexture::sample_level(int level, Vec2f uv, float* out) const {
 
 void MipTexture::sample_bilinear(Vec2f uv, float* out) const { sample_level(0, uv, out); }
 
-float MipTexture::level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const {
-    // J columns in level-0 texels per pixel; the sign of dv does not change J^T J.
-    const float w = float(width()), h = float(height());
+namespace {
+// The major eigenvalue of J^T J, J's columns in level-0 texels per pixel of a w x h texture (the
+// sign of dv does not change J^T J). Shared by the single and the batched LOD, so both give the
+// same bits.
+TDF_FORCE_INLINE float lod_major(Vec2f duv_dx, Vec2f duv_dy, float w, float h) {
     const float ax = duv_dx.x * w, ay = duv_dx.y * h;
     const float bx = duv_dy.x * w, by = duv_dy.y * h;
     const float a = ax * ax + ay * ay, c = bx * bx + by * by, b = ax * bx + ay * by;
     const float half_diff = 0.5f * (a - c);
-    const float major = 0.5f * (a + c) + std::sqrt(half_diff * half_diff + b * b);
-    return major > 0.f ? 0.5f * std::log2(major) : -1e30f;
+    return 0.5f * (a + c) + std::sqrt(half_diff * half_diff + b * b);
+}
+TDF_FORCE_INLINE float lod_of_major(float major) { return major > 0.f ? 0.5f * std::log2(major) : -1e30f; }
+}  // namespace
+
+float MipTexture::level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const {
+    return lod_of_major(lod_major(duv_dx, duv_dy, float(width()), float(height())));
 }
 
 void MipTexture::sample_trilinear(Vec2f uv, Vec2f duv_dx, Vec2f duv_dy, float* out, int max_level) const {
@@ -102,7 +109,7 @@ struct LevelPair {
     float frac;
     bool blend_next;
 };
-inline LevelPair level_pair(float lod, int level_count, int max_level) {
+TDF_FORCE_INLINE LevelPair level_pair(float lod, int level_count, int max_level) {
     const int top = max_level < 0 ? level_count - 1 : std::min(max_level, level_count - 1);
     if (!(lod > 0.f)) lod = 0.f;  // also catches NaN
     lod = std::min(lod, float(top));
@@ -125,7 +132,7 @@ namespace {
 // Both lookups of sample_trilinear_pair_at; C > 0 fixes both channel counts (3: RGB albedo and
 // XYZ tactile map, the renderer's inner loop), 0 reads them from the images.
 template <int C>
-void sample_pair(const std::vector<Image>& a, const std::vector<Image>& b, Vec2f uv, LevelPair p, float* out_a,
+TDF_FORCE_INLINE void sample_pair(const std::vector<Image>& a, const std::vector<Image>& b, Vec2f uv, LevelPair p, float* out_a,
                  float* out_b) {
     const auto blend = [](const Image& img, const BilinearFootprint& f, float* out) {
         if constexpr (C > 0)
@@ -155,6 +162,34 @@ void MipTexture::sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, flo
         sample_pair<3>(m_levels, other.m_levels, uv, p, out, other_out);
     else
         sample_pair<0>(m_levels, other.m_levels, uv, p, out, other_out);
+}
+
+// Compiled for AVX-512, AVX2 and the x86-64 baseline, picked at load time (GCC target_clones):
+// the LODs' arithmetic vectorises, and the footprints use the instruction sets' rounding. Every
+// clone gives sample_trilinear_pair_at's bits: the same operations in the same order, no FMA
+// contraction in this file (src/CMakeLists.txt), and the same glibc log2f.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
+void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered, const Vec2f* uv,
+                                        const Vec2f* duv_dx, const Vec2f* duv_dy, float* lod, float* out,
+                                        float* other_out, int max_level) const {
+    TDF_CHECK(other.width() == width() && other.height() == height());
+    const float w = float(width()), h = float(height());
+    for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(duv_dx[i], duv_dy[i], w, h);
+    for (std::size_t i = 0; i < n; ++i)
+        if (covered[i] > 0.f) lod[i] = lod_of_major(lod[i]);
+    const int levels = level_count();
+    const std::size_t ca = std::size_t(channels()), cb = std::size_t(other.channels());
+    const bool rgb = ca == 3 && cb == 3;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!(covered[i] > 0.f)) continue;
+        const LevelPair p = level_pair(lod[i], levels, max_level);
+        if (rgb)
+            sample_pair<3>(m_levels, other.m_levels, uv[i], p, out + 3 * i, other_out + 3 * i);
+        else
+            sample_pair<0>(m_levels, other.m_levels, uv[i], p, out + ca * i, other_out + cb * i);
+    }
 }
 
 namespace {

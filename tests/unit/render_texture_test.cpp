@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <vector>
 
 using namespace tdf;
 
@@ -117,4 +119,57 @@ TEST(MipTexture, TrilinearLodFromJacobian) {
 TEST(MipTexture, EmptyImageIsAnError) {
     const Image empty;
     EXPECT_THROW(MipTexture{empty}, Error);
+}
+
+// The renderer's batched lookups (one tile at a time, compiled for AVX-512, AVX2 and the baseline
+// and picked at load time) give the single lookups' bits: LOD included, for RGB pairs and for
+// other channel counts, with points skipped where nothing was hit.
+TEST(MipTexture, BatchedPairLookupsEqualTheSingleOnesBitForBit) {
+    for (const int channels : {3, 4}) {
+        Image a(64, 48, channels), b(64, 48, 3);
+        for (int y = 0; y < 48; ++y)
+            for (int x = 0; x < 64; ++x) {
+                for (int k = 0; k < channels; ++k) a.at(x, y, k) = std::sin(0.37f * float(x * (k + 1)) + 0.11f * float(y));
+                for (int k = 0; k < 3; ++k) b.at(x, y, k) = std::cos(0.23f * float(x) - 0.41f * float(y * (k + 2)));
+            }
+        const MipTexture ta(a), tb(b);
+        constexpr std::size_t n = 300;
+        std::vector<float> covered(n), lod(n);
+        std::vector<Vec2f> uv(n), dx(n), dy(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const float s = float(i);
+            covered[i] = i % 7 == 3 ? 0.f : 1.f;
+            // UVs outside [0, 1) wrap; footprints from magnified (LOD < 0) to beyond the top level.
+            uv[i] = {std::fmod(s * 0.173f, 3.f) - 1.f, std::fmod(s * 0.291f, 2.5f) - 0.7f};
+            const float scale = std::exp2(float(int(i % 19)) - 9.f) * (1.f + 0.01f * s);
+            dx[i] = {scale * std::cos(s), scale * 0.3f * std::sin(s)};
+            dy[i] = {-scale * 0.5f * std::sin(2.f * s), scale * std::cos(3.f * s)};
+        }
+        dx[5] = dy[5] = {};  // a zero footprint
+        std::vector<float> out_a(n * std::size_t(channels), -7.f), out_b(n * 3, -7.f);
+        for (const int max_level : {-1, 2}) {
+            ta.sample_trilinear_pairs(tb, n, covered.data(), uv.data(), dx.data(), dy.data(), lod.data(), out_a.data(),
+                                      out_b.data(), max_level);
+            std::size_t compared = 0;
+            for (std::size_t i = 0; i < n; ++i) {
+                if (!(covered[i] > 0.f)) continue;
+                float want_a[kMaxTextureChannels], want_b[kMaxTextureChannels];
+                ta.sample_trilinear_pair_at(tb, uv[i], ta.level_of_detail(dx[i], dy[i]), want_a, want_b, max_level);
+                for (int k = 0; k < channels; ++k)
+                    ASSERT_EQ(std::memcmp(&want_a[k], &out_a[i * std::size_t(channels) + std::size_t(k)], 4), 0)
+                        << "channels " << channels << " point " << i << " channel " << k;
+                for (int k = 0; k < 3; ++k)
+                    ASSERT_EQ(std::memcmp(&want_b[k], &out_b[i * 3 + std::size_t(k)], 4), 0) << "point " << i;
+                ++compared;
+            }
+            EXPECT_EQ(compared, n - n / 7 - (n % 7 > 3 ? 1 : 0));
+        }
+    }
+}
+
+TEST(MipTextureDeathTest, BatchedPairLookupsNeedMapsOfOneSize) {
+    const MipTexture a(Image(8, 8, 3)), b(Image(8, 4, 3));
+    float covered = 1.f, lod = 0.f, out_a[3], out_b[3];
+    const Vec2f uv{0.5f, 0.5f}, d{0.1f, 0.f};
+    EXPECT_DEATH(a.sample_trilinear_pairs(b, 1, &covered, &uv, &d, &d, &lod, out_a, out_b), "internal check failed");
 }

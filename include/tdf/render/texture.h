@@ -72,6 +72,13 @@ public:
     /// albedo and a tactile map laid alike), so both share one footprint per level.
     void sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, float lod, float* out, float* other_out,
                                   int max_level = -1) const;
+    /// sample_trilinear_pair_at for the n points with covered[i] > 0, each at the LOD
+    /// level_of_detail(duv_dx[i], duv_dy[i]) (bit for bit): point i's texels go to
+    /// out + i * channels() and other_out + i * other.channels(); `lod` is n floats of scratch.
+    /// The whole tile at once lets the LODs' arithmetic vectorise.
+    void sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered, const Vec2f* uv,
+                                const Vec2f* duv_dx, const Vec2f* duv_dy, float* lod, float* out, float* other_out,
+                                int max_level = -1) const;
     /// The texels and weights sample_trilinear_at(uv, lod, out, max_level) blends (same LOD
     /// clamping, same wrap addressing), for optimizers that need the adjoint (texture_gradient.h).
     /// Weights sum to 1.
