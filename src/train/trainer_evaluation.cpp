@@ -41,10 +41,18 @@ Camera Trainer::held_out_patch(int k) const {
                              m_config.patch_half_extent);
 }
 
-void Trainer::evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs) const {
-    std::vector<std::size_t> hits;
+namespace {
+// The pixels of g's hits in pixel order: hit q is pixel hits[q] (outputs[q] is its field value).
+void list_hits(const GBuffer& g, std::vector<std::size_t>& hits) {
+    hits.clear();
     for (std::size_t p = 0; p < g.pixel_count(); ++p)
         if (g.mask[p] > 0.0f) hits.push_back(p);
+}
+}  // namespace
+
+void Trainer::evaluate_hits(const GBuffer& g, std::vector<FieldOutputs>& outputs) const {
+    std::vector<std::size_t> hits;
+    list_hits(g, hits);
     outputs.resize(hits.size());
     if (!texture_space()) {
         std::vector<Vec3f> points(hits.size());
@@ -79,15 +87,19 @@ LearnedImages learned_images(const Camera& camera, const GBuffer& g, const std::
     LearnedImages images{Image(g.width, g.height, 3, 1.0f), Image(g.width, g.height, 3, 0.0f),
                          Image(g.width, g.height, 1, 0.0f)};
     const ViewRotation rot = view_rotation(camera);
-    std::size_t q = 0;
-    for (std::size_t p = 0; p < g.pixel_count(); ++p) {
-        if (g.mask[p] <= 0.0f) continue;
-        const FieldOutputs& out = outputs[q++];
-        const Vec3f n_v = tangent_to_view(g, p, rot, out.normal);
-        std::copy(&out.albedo.x, &out.albedo.x + 3, images.albedo.data() + 3 * p);
-        std::copy(&n_v.x, &n_v.x + 3, images.view_normals.data() + 3 * p);
-        images.mask.data()[p] = 1.0f;
-    }
+    std::vector<std::size_t> hits;
+    list_hits(g, hits);
+    TDF_CHECK_EQ(hits.size(), outputs.size());
+    parallel_for(hits.size(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t q = begin; q < end; ++q) {
+            const std::size_t p = hits[q];
+            const FieldOutputs& out = outputs[q];
+            const Vec3f n_v = tangent_to_view(g, p, rot, out.normal);
+            std::copy(&out.albedo.x, &out.albedo.x + 3, images.albedo.data() + 3 * p);
+            std::copy(&n_v.x, &n_v.x + 3, images.view_normals.data() + 3 * p);
+            images.mask.data()[p] = 1.0f;
+        }
+    });
     return images;
 }
 }  // namespace
@@ -108,6 +120,7 @@ QualityReport Trainer::evaluate_held_out() const {
     std::size_t values_fg = 0, values_full = 0;
     GBuffer g;
     std::vector<FieldOutputs> outputs, inputs, added;
+    std::vector<std::size_t> hit_pixels;
     // The seam measures of one view's learned maps and of the input's own (its albedo through its
     // UVs; in texture space also the tactile map laid over the atlas, sampled as the learned map is).
     struct ViewSeams {
@@ -120,32 +133,39 @@ QualityReport Trainer::evaluate_held_out() const {
         if (scored) values_full += 3 * g.pixel_count();  // background: white in both, zero error (spec 5.2)
         inputs.resize(outputs.size());
         added.resize(outputs.size());
-        std::size_t q = 0;
-        for (std::size_t p = 0; p < g.pixel_count(); ++p) {
-            if (g.mask[p] <= 0.0f) continue;
-            FieldOutputs& input = inputs[q];
-            input.albedo = sample_albedo(*m_target.material, mesh, g, p, true);
-            input.normal = Vec3f{0, 0, 1};
-            // What the run added (issue 29): against the input as the learned map samples it
-            // (the atlas bake through the same taps), so resampling is not counted as added.
-            added[q] = outputs[q];
-            added[q].albedo = outputs[q].albedo - input.albedo;
-            if (texture_space()) {
-                TrilinearTaps taps;
-                const float lod = m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]);
-                m_tactile_target_texture.taps(g.uv[p], lod, -1, taps);
-                input.normal = safe_normalize(gather3(m_tactile_target_texture, taps));
-                m_albedo_target_texture.taps(g.uv[p], lod, -1, taps);  // both targets: the atlas's size
-                added[q].albedo = outputs[q].albedo - gather3(m_albedo_target_texture, taps);
+        // The input at each hit, in parallel.
+        list_hits(g, hit_pixels);
+        TDF_CHECK_EQ(hit_pixels.size(), outputs.size());
+        parallel_for(hit_pixels.size(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t q = begin; q < end; ++q) {
+                const std::size_t p = hit_pixels[q];
+                FieldOutputs& input = inputs[q];
+                input.albedo = sample_albedo(*m_target.material, mesh, g, p, true);
+                input.normal = Vec3f{0, 0, 1};
+                // What the run added (issue 29): against the input as the learned map samples it
+                // (the atlas bake through the same taps), so resampling is not counted as added.
+                added[q] = outputs[q];
+                added[q].albedo = outputs[q].albedo - input.albedo;
+                if (texture_space()) {
+                    TrilinearTaps taps;
+                    const float lod = m_tactile_target_texture.level_of_detail(g.duv_dx[p], g.duv_dy[p]);
+                    m_tactile_target_texture.taps(g.uv[p], lod, -1, taps);
+                    input.normal = safe_normalize(gather3(m_tactile_target_texture, taps));
+                    m_albedo_target_texture.taps(g.uv[p], lod, -1, taps);  // both targets: the atlas's size
+                    added[q].albedo = outputs[q].albedo - gather3(m_albedo_target_texture, taps);
+                }
             }
-            const Vec3f e = outputs[q++].albedo - input.albedo;
-            if (!scored) continue;
-            for (int c = 0; c < 3; ++c) {
-                squared += double(e[c]) * e[c];
-                max_error = std::max(max_error, double(std::fabs(e[c])));
+        });
+        // The error sums in hit order, one thread: the same bits on any thread count.
+        if (scored)
+            for (std::size_t q = 0; q < outputs.size(); ++q) {
+                const Vec3f e = outputs[q].albedo - inputs[q].albedo;
+                for (int c = 0; c < 3; ++c) {
+                    squared += double(e[c]) * e[c];
+                    max_error = std::max(max_error, double(std::fabs(e[c])));
+                }
+                values_fg += 3;
             }
-            values_fg += 3;
-        }
         const LearnedImages learned = learned_images(camera, g, outputs);
         const LearnedImages input = learned_images(camera, g, inputs);
         if (scored) {
