@@ -9,10 +9,25 @@
 
 namespace tdf {
 
+namespace {
+constexpr std::uint64_t kFnv1aPrime = 1099511628211ULL;
+}  // namespace
+
 std::uint64_t fnv1a(const char* data, std::size_t size, std::uint64_t hash) {
     for (std::size_t i = 0; i < size; ++i) {
         hash ^= std::uint8_t(data[i]);
-        hash *= 1099511628211ULL;
+        hash *= kFnv1aPrime;
+    }
+    return hash;
+}
+
+std::uint64_t fnv1a_zeros(std::size_t size, std::uint64_t hash) {
+    // A zero byte leaves the xor unchanged, so `size` of them multiply by prime^size (mod 2^64):
+    // square-and-multiply instead of one multiplication a byte.
+    std::uint64_t power = kFnv1aPrime;
+    for (std::size_t n = size; n > 0; n >>= 1) {
+        if (n & 1) hash *= power;
+        power *= power;
     }
     return hash;
 }
