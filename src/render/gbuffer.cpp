@@ -2,15 +2,17 @@
 
 namespace tdf {
 
-void GBuffer::resize(int new_width, int new_height) {
+void GBuffer::resize(int new_width, int new_height, GBufferFields new_fields) {
     width = new_width;
     height = new_height;
+    fields = new_fields;
     const std::size_t n = pixel_count();
+    const std::size_t ids = has_ids_and_depth() ? n : 0;
     mask.resize(n);
-    triangle.resize(n);
-    barycentric.resize(n);
+    triangle.resize(ids);
+    barycentric.resize(ids);
     position.resize(n);
-    depth.resize(n);
+    depth.resize(ids);
     normal.resize(n);
     tangent.resize(n);
     handedness.resize(n);
@@ -21,10 +23,12 @@ void GBuffer::resize(int new_width, int new_height) {
 
 void GBuffer::clear_pixel(std::size_t i) {
     mask[i] = 0.f;
-    triangle[i] = -1;
-    barycentric[i] = {};
+    if (has_ids_and_depth()) {
+        triangle[i] = -1;
+        barycentric[i] = {};
+        depth[i] = 0.f;
+    }
     position[i] = {};
-    depth[i] = 0.f;
     normal[i] = {};
     tangent[i] = {};
     handedness[i] = 0.f;

@@ -190,6 +190,7 @@ void trace_region(const EmbreeScene& scene, const TriangleMesh& mesh, const Came
     RayDerivatives rd;
     camera.ray_derivatives(rd.do_dx, rd.do_dy, rd.dd_dx, rd.dd_dy);
     TriangleCache tc;
+    const bool ids_and_depth = out.has_ids_and_depth();
     trace_tile_dispatch(scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
         const std::size_t i = out.index(x - ox, y - oy);
         if (packet.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) {
@@ -201,10 +202,12 @@ void trace_region(const EmbreeScene& scene, const TriangleMesh& mesh, const Came
         const float b1 = packet.hit.u[lane], b2 = packet.hit.v[lane], t = packet.ray.tfar[lane];
         const float b0 = 1.f - b1 - b2;
         out.mask[i] = 1.f;
-        out.triangle[i] = f;
-        out.barycentric[i] = {b1, b2};
+        if (ids_and_depth) {
+            out.triangle[i] = f;
+            out.barycentric[i] = {b1, b2};
+            out.depth[i] = t;  // direction has camera-space z = -1, so t = -z_cam
+        }
         out.position[i] = tc.p0 * b0 + tc.p1 * b1 + tc.p2 * b2;
-        out.depth[i] = t;  // direction has camera-space z = -1, so t = -z_cam
         out.normal[i] = safe_normalize(tc.n0 * b0 + tc.n1 * b1 + tc.n2 * b2);
         if (tc.has_tangents) {
             const Vec4f tw = tc.t0 * b0 + tc.t1 * b1 + tc.t2 * b2;
@@ -233,9 +236,10 @@ void trace_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera
     trace_region(scene, mesh, camera, x0, y0, x1, y1, tile, x0, y0);
 }
 
-void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out) {
+void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out,
+                   GBufferFields fields) {
     check_inputs(scene, mesh, camera);
-    out.resize(camera.width, camera.height);
+    out.resize(camera.width, camera.height, fields);
     parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
         trace_region(scene, mesh, camera, x0, y0, x1, y1, out, 0, 0);
     });

@@ -47,7 +47,10 @@ void Trainer::trace_views(std::size_t first, std::size_t last) {
     Batch& b = *m_batch;
     const std::size_t patches = std::size_t(m_config.patch_batch_size);
     for (std::size_t k = first; k < last; ++k)
-        trace_gbuffer(*m_target.scene, *m_target.mesh, b.cameras[k], b.gbuffers[k]);
+        // In texture space the iterations look the maps up and shade: no triangle ids,
+        // barycentrics or depth (field evaluation samples the input material through them).
+        trace_gbuffer(*m_target.scene, *m_target.mesh, b.cameras[k], b.gbuffers[k],
+                      texture_space() ? GBufferFields::Shading : GBufferFields::All);
     b.point_of.resize(b.gbuffers.size());
     b.points.clear();
     b.patch_hit_count = 0;

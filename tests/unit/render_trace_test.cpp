@@ -101,6 +101,41 @@ TEST(Trace, MatchesBareClosestHitTracing) {
     EXPECT_NEAR(hit.t, g.depth[g.index(50, 35)], 1e-5f);
 }
 
+// The shading-only G-buffer (the texture-space optimizer's iterations) holds the same shading
+// attributes, bit for bit, and no triangle ids, barycentrics or depth; reusing it for a full
+// G-buffer brings them back.
+TEST(Trace, ShadingFieldsEqualTheFullGBuffersAndLeaveOutIdsAndDepth) {
+    const TriangleMesh sphere = make_uv_sphere(1.f, 48, 24);
+    const EmbreeScene scene(sphere);
+    const Camera cam = Camera::orbit(10, 40, 2.5f, 49.1f, 100, 70);
+    const GBuffer full = trace_gbuffer(scene, sphere, cam);
+    GBuffer lean;
+    trace_gbuffer(scene, sphere, cam, lean, GBufferFields::Shading);
+    EXPECT_FALSE(lean.has_ids_and_depth());
+    EXPECT_TRUE(lean.triangle.empty() && lean.barycentric.empty() && lean.depth.empty());
+    ASSERT_EQ(lean.pixel_count(), full.pixel_count());
+    std::size_t hits = 0;
+    const auto same2 = [](Vec2f a, Vec2f b) { return a.x == b.x && a.y == b.y; };
+    const auto same3 = [](Vec3f a, Vec3f b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+    for (std::size_t i = 0; i < full.pixel_count(); ++i) {
+        hits += full.mask[i] > 0.f;
+        ASSERT_EQ(lean.mask[i], full.mask[i]) << i;
+        ASSERT_TRUE(same3(lean.position[i], full.position[i]) && same3(lean.normal[i], full.normal[i]) &&
+                    same3(lean.tangent[i], full.tangent[i]) && lean.handedness[i] == full.handedness[i] &&
+                    same2(lean.uv[i], full.uv[i]) && same2(lean.duv_dx[i], full.duv_dx[i]) &&
+                    same2(lean.duv_dy[i], full.duv_dy[i]))
+            << "pixel " << i;
+    }
+    EXPECT_GT(hits, full.pixel_count() / 4);
+    trace_gbuffer(scene, sphere, cam, lean);
+    ASSERT_TRUE(lean.has_ids_and_depth());
+    ASSERT_EQ(lean.depth.size(), full.depth.size());
+    for (std::size_t i = 0; i < full.pixel_count(); ++i) {
+        ASSERT_EQ(lean.triangle[i], full.triangle[i]);
+        ASSERT_EQ(lean.depth[i], full.depth[i]);
+    }
+}
+
 TEST(Trace, EmptyImageIsAnError) {
     const TriangleMesh quad = make_quad(1.f);
     const EmbreeScene scene(quad);

@@ -12,9 +12,15 @@
 
 namespace tdf {
 
+/// Which attributes a G-buffer holds. `Shading` leaves out the hit's triangle, barycentrics and
+/// depth (those vectors stay empty): what an optimizer that only looks the maps up and shades
+/// reads, 16 of the 80 bytes a pixel not written.
+enum class GBufferFields { All, Shading };
+
 struct GBuffer {
     int width = 0;
     int height = 0;
+    GBufferFields fields = GBufferFields::All;
     std::vector<float> mask;         ///< 1 hit, 0 background
     std::vector<int> triangle;       ///< index into TriangleMesh::triangles, -1 background
     std::vector<Vec2f> barycentric;  ///< (b1, b2): p = (1-b1-b2) p0 + b1 p1 + b2 p2
@@ -27,8 +33,10 @@ struct GBuffer {
     std::vector<Vec2f> duv_dx;  ///< d uv / d pixel x (ray differentials, or dr.interpolate's analytic ones)
     std::vector<Vec2f> duv_dy;  ///< d uv / d pixel y (pixel y grows down the image)
 
-    /// Sizes every attribute for width x height pixels (contents unspecified).
-    void resize(int new_width, int new_height);
+    /// Sizes every attribute `new_fields` holds for width x height pixels (contents unspecified)
+    /// and empties the others.
+    void resize(int new_width, int new_height, GBufferFields new_fields = GBufferFields::All);
+    bool has_ids_and_depth() const { return fields == GBufferFields::All; }
     std::size_t pixel_count() const { return std::size_t(width) * std::size_t(height); }
     std::size_t index(int x, int y) const { return std::size_t(y) * std::size_t(width) + std::size_t(x); }
     /// Sets pixel i to background.

@@ -17,8 +17,9 @@ constexpr int kTraceTile = 16;
 /// Traces camera.width x camera.height primary rays. `mesh` must be the mesh `scene` was built
 /// from (its attributes are interpolated at the hits). Deterministic for any thread count.
 GBuffer trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera);
-/// The same, reusing `out`'s allocations.
-void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out);
+/// The same, reusing `out`'s allocations; `fields` chooses what it holds (GBufferFields).
+void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out,
+                   GBufferFields fields = GBufferFields::All);
 /// Traces the pixels [x0, x1) x [y0, y1) of the camera's image into `tile`, resized to
 /// (x1 - x0) x (y1 - y0) when needed: tile pixel (0, 0) is image pixel (x0, y0). For renderers
 /// that shade each tile right after tracing it from a small, cache-resident buffer.
