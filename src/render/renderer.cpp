@@ -233,67 +233,54 @@ private:
                 put3(o + 3 * i, mask[i] > 0.f ? lit_color(l.albedo[i], l.shade[i], m_color_space) : m_background);
     }
 
-    // The albedo and the (unnormalised) tangent-space tactile normal of hit pixel i. With an
-    // albedo and a tactile map of one size laid alike and filtered alike (training shading's
-    // default), both lookups share the LOD and the bilinear footprints.
-    void sample_maps(const GBuffer& g, std::size_t i, PixelLod& lod, Vec3f& albedo, Vec3f& p) const {
+    // The albedo of hit pixel i, when the maps are not looked up as a pair.
+    Vec3f albedo_at(const GBuffer& g, std::size_t i) const {
         using Source = SurfaceMaterial::AlbedoSource;
-        const bool want_tactile = m_need_frame && m_mat.tactile;
-        if (m_paired_maps && m_need_albedo && want_tactile) {
-            float a[kMaxTextureChannels], t[kMaxTextureChannels];
-            m_mat.albedo->sample_trilinear_pair_at(*m_mat.tactile, g.uv[i], lod.of(*m_mat.albedo), a, t, -1);
-            albedo = texel_rgb(*m_mat.albedo, a);
-            p = {t[0], t[1], t[2]};
-            return;
+        if (m_mat.albedo_source == Source::Texture) {
+            PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
+            return sample_rgb(*m_mat.albedo, g.uv[i], lod, m_albedo_mipmapped, -1);
         }
-        if (m_need_albedo) {
-            if (m_mat.albedo_source == Source::Texture)
-                albedo = sample_rgb(*m_mat.albedo, g.uv[i], lod, m_albedo_mipmapped, -1);
-            else if (m_mat.albedo_source == Source::VertexColors)
-                albedo = vertex_color_at(m_mesh, g, i);
-            else
-                albedo = m_mat.albedo_constant;
-        }
-        if (want_tactile) {
-            float texel[kMaxTextureChannels];
-            // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
-            m_mat.tactile->sample_trilinear_at(g.uv[i] * m_tactile_scale,
-                                               lod.of(*m_mat.tactile) + m_tactile_lod_offset,
-                                               texel,
-                                               m_tactile_max_level);
-            p = {texel[0], texel[1], texel[2]};
-        }
+        if (m_mat.albedo_source == Source::VertexColors) return vertex_color_at(m_mesh, g, i);
+        return m_mat.albedo_constant;
     }
 
-    // The texels of a tile's paired lookups (sample_trilinear_pairs).
+    // The texels of a tile's lookups (sample_trilinear_pairs, sample_trilinear_many).
     struct TilePairs {
         float lod[ShadeLanes::kMax];
         float albedo[ShadeLanes::kMax * kMaxTextureChannels];
         float tactile[ShadeLanes::kMax * kMaxTextureChannels];
     };
 
-    // The lanes' inputs: the G-buffer's frame and position, and the texture lookups of the hits
-    // (with paired maps, the whole tile's at once).
+    // The lanes' inputs: the G-buffer's frame and position, and the texture lookups of the hits.
+    // The tactile map is looked up for the whole tile at once, together with the albedo when
+    // both maps have one size and one filter (training shading's default: one LOD and one
+    // bilinear footprint a level for both).
     void fill_lanes(const GBuffer& g, ShadeLanes& l) const {
         const std::size_t n = g.pixel_count();
         l.count = int(n);
-        const bool pairs = m_paired_maps && m_need_albedo && m_need_frame;
+        const bool want_tactile = m_need_frame && m_mat.tactile;
+        const bool pairs = m_paired_maps && m_need_albedo && want_tactile;
         static thread_local TilePairs tile;
         if (pairs)
             m_mat.albedo->sample_trilinear_pairs(*m_mat.tactile, n, g.mask.data(), g.uv.data(), g.duv_dx.data(),
                                                  g.duv_dy.data(), tile.lod, tile.albedo, tile.tactile, -1);
+        else if (want_tactile)
+            // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
+            m_mat.tactile->sample_trilinear_many(n, g.mask.data(), g.uv.data(), g.duv_dx.data(), g.duv_dy.data(),
+                                                 m_tactile_scale, m_tactile_lod_offset, tile.lod, tile.tactile,
+                                                 m_tactile_max_level);
         const std::size_t ca = std::size_t(m_mat.albedo ? m_mat.albedo->channels() : 0);
         const std::size_t ct = std::size_t(m_mat.tactile ? m_mat.tactile->channels() : 0);
         for (std::size_t i = 0; i < n; ++i) {
             Vec3f albedo = m_background, p{0, 0, 1};
             if (g.mask[i] > 0.f) {
-                if (pairs) {
+                if (pairs)
                     albedo = texel_rgb(*m_mat.albedo, tile.albedo + ca * i);
+                else if (m_need_albedo)
+                    albedo = albedo_at(g, i);
+                if (want_tactile) {
                     const float* t = tile.tactile + ct * i;
                     p = {t[0], t[1], t[2]};
-                } else {
-                    PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
-                    sample_maps(g, i, lod, albedo, p);
                 }
             }
             l.albedo[i] = albedo;

@@ -119,13 +119,22 @@ TDF_FORCE_INLINE LevelPair level_pair(float lod, int level_count, int max_level)
 }
 }  // namespace
 
-void MipTexture::sample_trilinear_at(Vec2f uv, float lod, float* out, int max_level) const {
-    const LevelPair p = level_pair(lod, level_count(), max_level);
-    sample_level(p.l0, uv, out);
+namespace {
+// One trilinear lookup (sample_trilinear_at), inlined into the batched loop's clones too.
+TDF_FORCE_INLINE void trilinear_at(const std::vector<Image>& levels, Vec2f uv, float lod, float* out, int max_level) {
+    const LevelPair p = level_pair(lod, int(levels.size()), max_level);
+    const Image& first = levels[std::size_t(p.l0)];
+    blend_level(first, wrapped_footprint(first, uv), out);
     if (!p.blend_next) return;
     float next[kMaxTextureChannels];
-    sample_level(p.l0 + 1, uv, next);
-    lerp_levels(channels(), p.frac, next, out);
+    const Image& second = levels[std::size_t(p.l0 + 1)];
+    blend_level(second, wrapped_footprint(second, uv), next);
+    lerp_levels(levels[0].channels(), p.frac, next, out);
+}
+}  // namespace
+
+void MipTexture::sample_trilinear_at(Vec2f uv, float lod, float* out, int max_level) const {
+    trilinear_at(m_levels, uv, lod, out, max_level);
 }
 
 namespace {
@@ -190,6 +199,22 @@ void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, 
         else
             sample_pair<0>(m_levels, other.m_levels, uv[i], p, out + ca * i, other_out + cb * i);
     }
+}
+
+// Compiled like sample_trilinear_pairs, for the same reasons; the bits of sample_trilinear_at.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
+void MipTexture::sample_trilinear_many(std::size_t n, const float* covered, const Vec2f* uv, const Vec2f* duv_dx,
+                                       const Vec2f* duv_dy, float uv_scale, float lod_offset, float* lod, float* out,
+                                       int max_level) const {
+    const float w = float(width()), h = float(height());
+    for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(duv_dx[i], duv_dy[i], w, h);
+    for (std::size_t i = 0; i < n; ++i)
+        if (covered[i] > 0.f) lod[i] = lod_of_major(lod[i]) + lod_offset;
+    const std::size_t c = std::size_t(channels());
+    for (std::size_t i = 0; i < n; ++i)
+        if (covered[i] > 0.f) trilinear_at(m_levels, uv[i] * uv_scale, lod[i], out + c * i, max_level);
 }
 
 namespace {

@@ -167,6 +167,43 @@ TEST(MipTexture, BatchedPairLookupsEqualTheSingleOnesBitForBit) {
     }
 }
 
+// The batched single-map lookups (the visualizer's tactile map, a map laid at a UV scale) give
+// sample_trilinear_at's bits at level_of_detail + the scale's LOD offset.
+TEST(MipTexture, BatchedLookupsEqualTheSingleOnesBitForBit) {
+    for (const int channels : {3, 1}) {
+        Image img(40, 24, channels);
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 40; ++x)
+                for (int k = 0; k < channels; ++k) img.at(x, y, k) = std::sin(0.29f * float(x * (k + 1)) - 0.17f * float(y));
+        const MipTexture tex(img);
+        constexpr std::size_t n = 257;
+        std::vector<float> covered(n), lod(n), out(n * std::size_t(channels), -7.f);
+        std::vector<Vec2f> uv(n), dx(n), dy(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const float s = float(i);
+            covered[i] = i % 5 == 1 ? 0.f : 1.f;
+            uv[i] = {std::fmod(s * 0.137f, 2.f) - 0.5f, std::fmod(s * 0.311f, 3.f) - 1.2f};
+            const float scale = std::exp2(float(int(i % 17)) - 8.f);
+            dx[i] = {scale * std::cos(2.f * s), scale * std::sin(s)};
+            dy[i] = {scale * 0.4f * std::sin(3.f * s), scale * std::cos(s)};
+        }
+        for (const float uv_scale : {1.f, 11.9f})
+            for (const int max_level : {-1, 5, 1}) {
+                const float offset = std::log2(uv_scale);
+                tex.sample_trilinear_many(n, covered.data(), uv.data(), dx.data(), dy.data(), uv_scale, offset, lod.data(),
+                                          out.data(), max_level);
+                for (std::size_t i = 0; i < n; ++i) {
+                    if (!(covered[i] > 0.f)) continue;
+                    float want[kMaxTextureChannels];
+                    tex.sample_trilinear_at(uv[i] * uv_scale, tex.level_of_detail(dx[i], dy[i]) + offset, want, max_level);
+                    for (int k = 0; k < channels; ++k)
+                        ASSERT_EQ(std::memcmp(&want[k], &out[i * std::size_t(channels) + std::size_t(k)], 4), 0)
+                            << "channels " << channels << " scale " << uv_scale << " max_level " << max_level << " point " << i;
+                }
+            }
+    }
+}
+
 TEST(MipTextureDeathTest, BatchedPairLookupsNeedMapsOfOneSize) {
     const MipTexture a(Image(8, 8, 3)), b(Image(8, 4, 3));
     float covered = 1.f, lod = 0.f, out_a[3], out_b[3];

@@ -79,6 +79,12 @@ public:
     void sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered, const Vec2f* uv,
                                 const Vec2f* duv_dx, const Vec2f* duv_dy, float* lod, float* out, float* other_out,
                                 int max_level = -1) const;
+    /// sample_trilinear_at(uv[i] * uv_scale, level_of_detail(duv_dx[i], duv_dy[i]) + lod_offset,
+    /// out + i * channels(), max_level) for the n points with covered[i] > 0, bit for bit (a map
+    /// laid at a UV scale: its LOD moves by log2 of the scale); `lod` is n floats of scratch.
+    void sample_trilinear_many(std::size_t n, const float* covered, const Vec2f* uv, const Vec2f* duv_dx,
+                               const Vec2f* duv_dy, float uv_scale, float lod_offset, float* lod, float* out,
+                               int max_level = -1) const;
     /// The texels and weights sample_trilinear_at(uv, lod, out, max_level) blends (same LOD
     /// clamping, same wrap addressing), for optimizers that need the adjoint (texture_gradient.h).
     /// Weights sum to 1.
