@@ -22,6 +22,7 @@
 #include <cmath>
 #include <csetjmp>
 #include <cstdio>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -802,9 +803,17 @@ std::vector<ExrLayer> read_exr_layers(const std::string& path, ImageMetadata* me
             for (int c = 0; c < n; ++c) {
                 const std::string full = layer.name.empty() ? layer.channel_names[std::size_t(c)]
                                                             : layer.name + "." + layer.channel_names[std::size_t(c)];
-                char* base = reinterpret_cast<char*>(layer.image.data() + c) -
-                             (std::ptrdiff_t(window.min.x) + std::ptrdiff_t(window.min.y) * width) *
-                                 std::ptrdiff_t(sizeof(float) * std::size_t(n));
+                // OpenEXR addresses pixel (x, y) of the data window as base + x * xStride +
+                // y * yStride, so base lies before the image by the window's origin. That origin
+                // can be far outside the image (any int in a file), where pointer arithmetic would
+                // overflow (undefined behaviour, found by the image fuzzer): the address is
+                // computed in unsigned integers, which wrap, and OpenEXR's own sum lands back
+                // inside the image.
+                const std::uintptr_t origin =
+                    (std::uintptr_t(std::intptr_t(window.min.x)) +
+                     std::uintptr_t(std::intptr_t(window.min.y)) * std::uintptr_t(width)) *
+                    std::uintptr_t(sizeof(float) * std::size_t(n));
+                char* base = reinterpret_cast<char*>(reinterpret_cast<std::uintptr_t>(layer.image.data() + c) - origin);
                 frame.insert(full, Imf::Slice(Imf::FLOAT, base, sizeof(float) * std::size_t(n),
                                               sizeof(float) * std::size_t(n) * std::size_t(width)));
             }
