@@ -732,9 +732,16 @@ GuidanceResult ExemplarPatchMatchBackend::refine(const GuidanceRequest& request)
     // image is independent and draws from its own seed streams, so the order does not matter).
     const std::vector<Variant>* searched = use_surface ? nullptr : &search_variants(scale.exemplar_factor);
     std::vector<const OrientedVariants*> oriented(request.images.size(), nullptr);
-    if (use_surface)
+    if (use_surface) {
+        // Each image's orientation is one serial sum over its pixels (the same bits on any thread
+        // count); the images are summed side by side, the variant cache filled after, in order.
+        std::vector<Orientation> orientations(request.images.size());
+        parallel_for(request.images.size(), 1, [&](std::size_t i0, std::size_t i1) {
+            for (std::size_t item = i0; item < i1; ++item) orientations[item] = surface_orientation(request, item);
+        });
         for (std::size_t item = 0; item < request.images.size(); ++item)
-            oriented[item] = &oriented_variants(surface_orientation(request, item), scale.exemplar_factor);
+            oriented[item] = &oriented_variants(orientations[item], scale.exemplar_factor);
+    }
     GuidanceResult result;
     result.refined.resize(request.images.size());
     parallel_for(request.images.size(), 1, [&](std::size_t i0, std::size_t i1) {
