@@ -171,6 +171,29 @@ void resize_area_into(const Image& image, Image& out) {
     check_size(image.width(), image.height(), "resize source");
     TDF_CHECK_EQ(out.channels(), image.channels());
     const int w = out.width(), h = out.height(), c = image.channels();
+    if (image.width() == 2 * w && image.height() == 2 * h) {
+        // Exactly half the size (every mip level of an even map): each output value is its 2x2
+        // block's mean, without the general taps. Summed from zero in visit_area's order with
+        // its weight (0.5 x 0.5 = 0.25, exact), so the bits equal the general path's.
+        const std::size_t row = std::size_t(w) * std::size_t(c);
+        parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
+            for (std::size_t y = y0; y < y1; ++y) {
+                const float* top = image.pixel(0, int(2 * y));
+                const float* bottom = image.pixel(0, int(2 * y + 1));
+                float* dst = out.pixel(0, int(y));
+                for (std::size_t i = 0; i < row; ++i) {
+                    const std::size_t left = 2 * i - i % std::size_t(c), right = left + std::size_t(c);
+                    float sum = 0.0f;
+                    sum += 0.25f * top[left];
+                    sum += 0.25f * top[right];
+                    sum += 0.25f * bottom[left];
+                    sum += 0.25f * bottom[right];
+                    dst[i] = sum;
+                }
+            }
+        });
+        return;
+    }
     const AreaTaps tx = area_taps(image.width(), w), ty = area_taps(image.height(), h);
     parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
         for (std::size_t y = y0; y < y1; ++y)
@@ -195,6 +218,27 @@ Image resize_area(const Image& image, int width, int height) {
 void resize_area_adjoint(const Image& coarse, Image& fine) {
     const int w = coarse.width(), h = coarse.height(), c = coarse.channels();
     TDF_CHECK(c == fine.channels() && w > 0 && h > 0);
+    if (fine.width() == 2 * w && fine.height() == 2 * h) {
+        // Exactly half the size: each fine value gets one quarter of its block's gradient (the
+        // general scatter's single term for it, same bits).
+        const std::size_t row = std::size_t(w) * std::size_t(c);
+        parallel_for(std::size_t(h), 16, [&](std::size_t y0, std::size_t y1) {
+            for (std::size_t y = y0; y < y1; ++y) {
+                const float* g = coarse.pixel(0, int(y));
+                float* top = fine.pixel(0, int(2 * y));
+                float* bottom = fine.pixel(0, int(2 * y + 1));
+                for (std::size_t i = 0; i < row; ++i) {
+                    const std::size_t left = 2 * i - i % std::size_t(c), right = left + std::size_t(c);
+                    const float quarter = 0.25f * g[i];
+                    top[left] += quarter;
+                    top[right] += quarter;
+                    bottom[left] += quarter;
+                    bottom[right] += quarter;
+                }
+            }
+        });
+        return;
+    }
     const AreaTaps tx = area_taps(fine.width(), w), ty = area_taps(fine.height(), h);
     const auto scatter_row = [&](std::size_t y) {
         for (int x = 0; x < w; ++x) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -172,6 +173,40 @@ TEST(ImageOps, BoxDownsampleAdjointIsTheTranspose) {
         downsample_box_adjoint(y, adjoint_y);
         const double lhs = inner_product(coarse_x, y), rhs = inner_product(x, adjoint_y);
         EXPECT_NEAR(lhs, rhs, 1e-5 * (1 + std::abs(lhs))) << w << "x" << h;
+    }
+}
+
+// The exact-half path (every level of an even mip pyramid) must give the general area
+// resize's bits: 0 + 0.25 a + 0.25 b + 0.25 c + 0.25 d in its order, and the adjoint one quarter
+// added once to each fine value. Negative zeros included (0 + -0 is +0 in both).
+TEST(ImageOps, ExactHalfBoxDownsampleAndAdjointKeepTheGeneralPathsBits) {
+    for (const int channels : {1, 3, 4}) {
+        Image x = random_image(10, 6, channels, std::uint64_t(40 + channels));
+        for (float& v : x.values()) v = v * 7.0f - 3.5f;
+        x.at(0, 0, 0) = -0.0f, x.at(1, 0, 0) = -0.0f, x.at(0, 1, 0) = -0.0f, x.at(1, 1, 0) = -0.0f;
+        const Image down = downsample_box(x);
+        ASSERT_EQ(down.width(), 5);
+        ASSERT_EQ(down.height(), 3);
+        for (int y = 0; y < 3; ++y)
+            for (int px = 0; px < 5; ++px)
+                for (int c = 0; c < channels; ++c) {
+                    float expected = 0.0f;
+                    for (int j = 0; j < 2; ++j)
+                        for (int i = 0; i < 2; ++i) expected += (0.5f * 0.5f) * x.at(2 * px + i, 2 * y + j, c);
+                    const float got = down.at(px, y, c);
+                    EXPECT_EQ(std::memcmp(&got, &expected, sizeof(float)), 0) << px << "," << y << "," << c;
+                }
+        const Image g = random_image(5, 3, channels, std::uint64_t(50 + channels));
+        Image fine = random_image(10, 6, channels, std::uint64_t(60 + channels));
+        const Image before = fine;
+        downsample_box_adjoint(g, fine);
+        for (int y = 0; y < 6; ++y)
+            for (int px = 0; px < 10; ++px)
+                for (int c = 0; c < channels; ++c) {
+                    const float expected = before.at(px, y, c) + (0.5f * 0.5f) * g.at(px / 2, y / 2, c);
+                    const float got = fine.at(px, y, c);
+                    EXPECT_EQ(std::memcmp(&got, &expected, sizeof(float)), 0) << px << "," << y << "," << c;
+                }
     }
 }
 
