@@ -80,8 +80,8 @@ struct Trainer::Batch {
     // Patch view-space normals, P x R x R, zero vectors off the surface.
     std::vector<Vec3f> patch_pred, patch_target, patch_grad;
     // Visual images at the output size, B x S x S x 3 (interleaved, image after image).
+    // The albedo images only while an albedo term weighs (matching); released after.
     std::vector<float> albedo_pred, albedo_target, albedo_grad, lambertian, lambertian_grad;
-    std::vector<float> lambertian_target;  // the input's lambertian under the same light (relief anchor)
     std::vector<float> shade;  // per point: the lambertian shade of visual hits
     Image internal;            // one view at its internal (SSAA) size
     // Which view and pixel each hit came from (texture evaluation looks the maps up there).
@@ -120,6 +120,7 @@ struct Trainer::GuidanceImages {
     std::vector<Image> controls;  // the learned view-space normals as the backend's control image
     std::vector<Image> masks;     // coverage
     std::vector<Image> surfaces;  // the mesh's own view-space normals (no relief)
+    std::vector<Image> references;  // the input's lambertian under the same light (relief anchor)
 };
 
 }  // namespace tdf

@@ -23,20 +23,27 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
     Batch& b = *m_batch;
     const int B = cfg.batch_size, S = cfg.resolution;
     const bool visual_guidance = phase.visual_guidance;
-    const std::size_t view_values = std::size_t(S) * std::size_t(S) * 3;
-    b.albedo_pred.resize(std::size_t(B) * view_values);
-    b.albedo_target.resize(b.albedo_pred.size());
-    b.albedo_grad.assign(b.albedo_pred.size(), 0.0f);
+    // The refinement weighs no albedo term by default (albedo_refine 0): its views then render
+    // only the lambertians, and the matching phase's albedo images are let go.
+    const bool albedo_terms = phase.albedo_weight > 0;
+    const std::size_t batch_values = std::size_t(B) * std::size_t(S) * std::size_t(S) * 3;
+    if (albedo_terms) {
+        b.albedo_pred.resize(batch_values);
+        b.albedo_target.resize(batch_values);
+        b.albedo_grad.assign(batch_values, 0.0f);
+    } else {
+        for (std::vector<float>* images : {&b.albedo_pred, &b.albedo_target, &b.albedo_grad})
+            std::vector<float>().swap(*images);
+    }
     if (visual_guidance) {
-        b.lambertian.resize(b.albedo_pred.size());
-        b.lambertian_target.resize(b.albedo_pred.size());
-        b.lambertian_grad.assign(b.albedo_pred.size(), 0.0f);
+        b.lambertian.resize(batch_values);
+        b.lambertian_grad.assign(batch_values, 0.0f);
         b.shade.assign(b.hit_pixel.size(), 0.0f);
     }
     GuidanceImages guidance_images;
-    render_visual_views(visual_guidance, guidance_images);
+    render_visual_views(albedo_terms, visual_guidance, guidance_images);
     const ImageBatchShape shape{B, S, S, 3};
-    if (phase.albedo_weight > 0 && B > 0) {
+    if (albedo_terms && B > 0) {
         const double value =
             phase.per_pixel_albedo
                 ? mse_loss(b.albedo_pred.data(), b.albedo_target.data(), b.albedo_pred.size(), b.albedo_grad.data(),
@@ -51,7 +58,7 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
 
 // The views at the output size: the learned albedo, the input's, and with visual guidance the
 // lambertian renders of both and the guidance's control images (normals, masks, surfaces).
-void Trainer::render_visual_views(bool visual_guidance, GuidanceImages& guidance_images) {
+void Trainer::render_visual_views(bool albedo_terms, bool visual_guidance, GuidanceImages& guidance_images) {
     const RunConfig& cfg = m_config;
     const TriangleMesh& mesh = *m_target.mesh;
     Batch& b = *m_batch;
@@ -81,8 +88,6 @@ void Trainer::render_visual_views(bool visual_guidance, GuidanceImages& guidance
             });
             if (resized) copy_into(resize_bilinear(b.internal, S, S), out);
         };
-        float* pred = b.albedo_pred.data() + std::size_t(k) * view_values;
-        render_internal([&](std::size_t, std::size_t q) { return b.outputs[q].albedo; }, pred);
         // The input's albedo: in texture space its bake over the atlas, sampled exactly as the learned
         // map is (same taps), so the learned map at its start renders identical images and only
         // what guidance asks for changes it; per pixel, the material itself (spec 3.1 step 5).
@@ -90,7 +95,11 @@ void Trainer::render_visual_views(bool visual_guidance, GuidanceImages& guidance
             if (!texture_space()) return sample_albedo(*m_target.material, mesh, g, p, true);
             return b.target[q];
         };
-        render_internal(input_albedo, b.albedo_target.data() + std::size_t(k) * view_values);
+        if (albedo_terms) {
+            render_internal([&](std::size_t, std::size_t q) { return b.outputs[q].albedo; },
+                            b.albedo_pred.data() + std::size_t(k) * view_values);
+            render_internal(input_albedo, b.albedo_target.data() + std::size_t(k) * view_values);
+        }
         if (visual_guidance) {
             const Vec3f light = b.lights[std::size_t(k)];
             const ViewRotation rot = view_rotation(view.camera);
@@ -102,10 +111,13 @@ void Trainer::render_visual_views(bool visual_guidance, GuidanceImages& guidance
                     return lambertian(b.outputs[q].albedo, b.shade[q]);
                 },
                 b.lambertian.data() + std::size_t(k) * view_values);
-            // The input asset under the same light and relief: what relief-aware refinement keeps.
+            // The input asset under the same light and relief: what relief-aware refinement keeps,
+            // rendered straight into the request's reference image.
+            Image reference(S, S, 3);
             render_internal(
                 [&](std::size_t p, std::size_t q) { return lambertian(input_albedo(p, q), b.shade[q]); },
-                b.lambertian_target.data() + std::size_t(k) * view_values);
+                reference.data());
+            guidance_images.references.push_back(std::move(reference));
             Image normals_internal(g.width, g.height, 3, 0.0f), mask_internal(g.width, g.height, 1, 0.0f);
             Image surface_internal(g.width, g.height, 3, 0.0f);
             parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
@@ -143,12 +155,11 @@ void Trainer::visual_guidance_terms(const Phase& phase, GuidanceImages guidance_
     request.iteration = phase.i;
     request.seed = m_seed ^ (std::uint64_t(phase.i) << 20) ^ 0x5649u;
     for (int k = 0; k < B; ++k) {
-        Image image(S, S, 3), reference(S, S, 3);
+        Image image(S, S, 3);
         std::copy_n(b.lambertian.data() + std::size_t(k) * view_values, view_values, image.data());
-        std::copy_n(b.lambertian_target.data() + std::size_t(k) * view_values, view_values, reference.data());
         request.images.push_back(std::move(image));
-        request.reference_images.push_back(std::move(reference));
     }
+    request.reference_images = std::move(guidance_images.references);
     request.control = std::move(guidance_images.controls);
     request.masks = std::move(guidance_images.masks);
     request.surface_normals = std::move(guidance_images.surfaces);
@@ -196,12 +207,13 @@ void Trainer::visual_terms_backward(const Phase& phase) {
             std::copy_n(grad.data() + std::size_t(k) * view_values, view_values, out.data());
             return resized ? resize_bilinear_adjoint(out, g.width, g.height) : out;
         };
-        const Image albedo_grad = to_internal(b.albedo_grad);
+        const bool albedo_terms = !b.albedo_grad.empty();
+        const Image albedo_grad = albedo_terms ? to_internal(b.albedo_grad) : Image();
         const Image lambertian_grad = visual_guidance ? to_internal(b.lambertian_grad) : Image();
         // Jacobi denominators: per value, 2 w / N for squared errors (an L1 term counts as a
         // squared error at a 0.1 scale), spread over the internal pixels as the resize spreads
         // the gradients.
-        const double values = double(b.albedo_pred.size());
+        const double values = double(B) * double(view_values);
         const double ssaa_share = double(S) * double(S) / (double(g.width) * double(g.height));
         const double albedo_kappa =
             (phase.per_pixel_albedo ? 2.0 * double(phase.albedo_weight) / values : 0.0) * ssaa_share;
@@ -217,8 +229,12 @@ void Trainer::visual_terms_backward(const Phase& phase) {
                     const double shade = visual_guidance ? double(b.shade[std::size_t(q)]) : 0.0;
                     b.curvature[std::size_t(q)] = float(albedo_kappa + lambertian_kappa * shade * shade);
                 }
-                const float* ga = albedo_grad.data() + 3 * p;
-                Vec3f d{ga[0], ga[1], ga[2]};
+                // Without albedo terms the albedo gradient is zero: d starts at +0 as it did.
+                Vec3f d;
+                if (albedo_terms) {
+                    const float* ga = albedo_grad.data() + 3 * p;
+                    d = Vec3f{ga[0], ga[1], ga[2]};
+                }
                 if (visual_guidance) {
                     const float* gl = lambertian_grad.data() + 3 * p;
                     d += lambertian_backward(b.shade[std::size_t(q)], Vec3f{gl[0], gl[1], gl[2]});

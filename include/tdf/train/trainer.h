@@ -249,7 +249,7 @@ private:
     void tactile_terms(const Phase& phase, LossRecord& record);
     // trainer_visual_terms.cpp: the views' renders, the albedo term, visual guidance, backward.
     void visual_terms(const Phase& phase, LossRecord& record);
-    void render_visual_views(bool visual_guidance, GuidanceImages& guidance_images);
+    void render_visual_views(bool albedo_terms, bool visual_guidance, GuidanceImages& guidance_images);
     void visual_guidance_terms(const Phase& phase, GuidanceImages guidance_images, LossRecord& record);
     void visual_terms_backward(const Phase& phase);
     // trainer_refinement.cpp
