@@ -39,21 +39,29 @@ std::vector<AlbedoSpot> find_albedo_spots(const Image& input, const std::vector<
     return spots;
 }
 
-Image albedo_spot_strip(const AlbedoSpot& spot, const Image& input, const Image& matched, const Image& final_albedo,
-                        int zoom) {
+Image albedo_spot_crop(const AlbedoSpot& spot, const Image& map) {
+    TDF_CHECK(map.channels() == 3 && spot.size > 0 && spot.x >= 0 && spot.y >= 0 &&
+              spot.x + spot.size <= map.width() && spot.y + spot.size <= map.height());
+    Image crop(spot.size, spot.size, 3);
+    for (int y = 0; y < spot.size; ++y)
+        std::copy_n(map.pixel(spot.x, spot.y + y), 3 * std::size_t(spot.size), crop.pixel(0, y));
+    return crop;
+}
+
+Image albedo_spot_strip(const Image& input_crop, const Image& matched_crop, const Image& final_crop, int zoom) {
     TDF_CHECK(zoom >= 1);
-    for (const Image* map : {&matched, &final_albedo})
-        TDF_CHECK(map->width() == input.width() && map->height() == input.height() && map->channels() == 3);
+    const int size = input_crop.width();
+    for (const Image* crop : {&input_crop, &matched_crop, &final_crop})
+        TDF_CHECK(crop->width() == size && crop->height() == size && crop->channels() == 3);
     constexpr int kGap = 4;
-    const int side = spot.size * zoom;
+    const int side = size * zoom;
     Image strip(3 * side + 2 * kGap, side, 3, 1.0f);
-    const Image* maps[] = {&input, &matched, &final_albedo};
+    const Image* crops[] = {&input_crop, &matched_crop, &final_crop};
     for (int k = 0; k < 3; ++k)
         for (int y = 0; y < side; ++y)
             for (int x = 0; x < side; ++x)
                 for (int c = 0; c < 3; ++c)
-                    strip.at(k * (side + kGap) + x, y, c) =
-                        std::clamp(maps[k]->at(spot.x + x / zoom, spot.y + y / zoom, c), 0.0f, 1.0f);
+                    strip.at(k * (side + kGap) + x, y, c) = std::clamp(crops[k]->at(x / zoom, y / zoom, c), 0.0f, 1.0f);
     return strip;
 }
 

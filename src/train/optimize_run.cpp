@@ -145,9 +145,28 @@ Json texture_space_quality(const Trainer& trainer, const BakedMaps& maps) {
     return quality;
 }
 
+// The after-matching albedo at the report's spots (issue 29).
+struct MatchedSpots {
+    bool after_matching = false;  // this process ran the matching phase's end
+    std::vector<AlbedoSpot> spots;
+    std::vector<Image> crops;  // per spot, the after-matching albedo's window
+};
+
+// The window of the input's darkest and brightest spot (issue 29) and the after-matching albedo's
+// crops there: all of the after-matching map the final report needs.
+MatchedSpots matched_spots(const Trainer& trainer, const Image& matched_albedo) {
+    MatchedSpots matched;
+    matched.after_matching = true;
+    const Image& input = trainer.albedo_target();
+    const int window = std::max(8, input.width() / 16);
+    matched.spots = find_albedo_spots(input, trainer.texel_charts(), window);
+    for (const AlbedoSpot& spot : matched.spots) matched.crops.push_back(albedo_spot_crop(spot, matched_albedo));
+    return matched;
+}
+
 // Issue 29's three numbers against their aims, and the spot crops the report page shows (input |
 // after matching | final at the input's darkest and brightest spot, `<base>_albedo_spot_*.png`).
-Json colour_check(const Trainer& trainer, const Image& final_albedo, const Image& matched_albedo,
+Json colour_check(const Trainer& trainer, const Image& final_albedo, const MatchedSpots& matched,
                   const std::string& base, const QualityReport& quality, const Json& texture) {
     const Json& range = texture["albedo_local_range"];
     const double lowpass = texture["albedo_psnr_lowpass_db"].get<double>();
@@ -163,12 +182,13 @@ Json colour_check(const Trainer& trainer, const Image& final_albedo, const Image
                  {"added_colour_geometry_correlation", quality.added_colour_geometry_correlation >= 0.4},
                  {"max_above_local_max", above <= kRangeMeasureLimit}}},
         {"spots", Json::array()}};
-    if (matched_albedo.empty()) return colour;  // no matching phase: nothing to set beside the final
+    if (!matched.after_matching) return colour;  // no matching phase: nothing to set beside the final
     const Image& input = trainer.albedo_target();
-    const int window = std::max(8, input.width() / 16);
-    for (const AlbedoSpot& spot : find_albedo_spots(input, trainer.texel_charts(), window)) {
+    for (std::size_t i = 0; i < matched.spots.size(); ++i) {
+        const AlbedoSpot& spot = matched.spots[i];
         const std::string file = fmt::format("{}_albedo_spot_{}.png", base, spot.name);
-        write_png(file, albedo_spot_strip(spot, input, matched_albedo, final_albedo, std::max(1, 256 / window)));
+        write_png(file, albedo_spot_strip(albedo_spot_crop(spot, input), matched.crops[i],
+                                          albedo_spot_crop(spot, final_albedo), std::max(1, 256 / spot.size)));
         colour["spots"].push_back({{"name", spot.name},
                                    {"file", std::filesystem::path(file).filename().string()},
                                    {"texel", {spot.x, spot.y}},
@@ -225,7 +245,7 @@ struct OptimizeRun {
     std::unique_ptr<PartTraining> parts;  // multi-part only
     std::string checkpoint_path;
     LossLog log;
-    Image matched_albedo;  // the after-matching albedo, for the report's spot crops (issue 29)
+    MatchedSpots matched_spots;  // the after-matching albedo's crops for the report (issue 29)
     // Multi-part: the learned normal map at the part boundaries after matching (bleed is
     // meaningful then, when the map equals the composed target; refinement changes texels everywhere).
     Json boundary_after_matching;
@@ -441,7 +461,7 @@ void export_matched(Trainer& trainer, OptimizeRun& run, const TriangleMesh& expo
     run.end_stage("evaluate_matched");
     log_info("after matching: albedo PSNR {:.2f} dB (held-out views, foreground), tactile mean cosine {:.4f}",
              matched.albedo_psnr_foreground, matched.tactile_mean_cosine);
-    run.matched_albedo = std::move(matched_maps.albedo);  // for the final report's spot crops
+    run.matched_spots = matched_spots(trainer, matched_maps.albedo);  // for the final report's spot crops
 }
 
 // The iterations, with checkpoints at phase ends and every checkpoint_every. Returns false when
@@ -544,7 +564,7 @@ void export_final(Trainer& trainer, OptimizeRun& run, const ProgressReporter& pr
         report["tactile_roundtrip"] = touch;
     if (const Json texture = texture_space_quality(trainer, maps); !texture.is_null()) {
         report["texture_space"] = texture;
-        report["colour"] = colour_check(trainer, maps.albedo, run.matched_albedo, run.base, quality, texture);
+        report["colour"] = colour_check(trainer, maps.albedo, run.matched_spots, run.base, quality, texture);
     }
     if (run.parts) {
         const std::vector<int> predicted = trainer.predicted_texel_parts();

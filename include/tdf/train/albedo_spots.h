@@ -22,9 +22,13 @@ struct AlbedoSpot {
 /// window qualifies (a tiny or fragmented atlas).
 std::vector<AlbedoSpot> find_albedo_spots(const Image& input, const std::vector<int>& label, int size);
 
-/// One strip per spot: input | after matching | final, each crop scaled `zoom` x with nearest
-/// texels (so texels stay visible) and 4 white pixels between them. All three maps RGB of one size.
-Image albedo_spot_strip(const AlbedoSpot& spot, const Image& input, const Image& matched, const Image& final_albedo,
-                        int zoom);
+/// The spot's window of `map` (RGB, the size of the input the spot was found in): what the strip
+/// shows of it, so a run keeps the after-matching albedo's two crops, not the whole map.
+Image albedo_spot_crop(const AlbedoSpot& spot, const Image& map);
+
+/// One strip per spot: input | after matching | final, three crops of one spot
+/// (albedo_spot_crop), each scaled `zoom` x with nearest texels (so texels stay visible), clamped
+/// to [0, 1], with 4 white pixels between them.
+Image albedo_spot_strip(const Image& input_crop, const Image& matched_crop, const Image& final_crop, int zoom);
 
 }  // namespace tdf
