@@ -464,10 +464,11 @@ public:
     float* data() { return m_values.data(); }
 
 private:
-    // Enough for the images refined in parallel; at most 4 x 16 MB stay allocated (4 MB per
-    // buffer in the main job: a 512^2 image with 4 weighted channels).
+    // Enough for the images refined in parallel; at most 4 x 4 MB stay allocated: a 512^2 image
+    // with 4 weighted channels, the guidance's blurs in the main job. A map-sized blur (the
+    // measures' at 1024^2, 16 MB) gives its buffer back instead of holding it through the run.
     static constexpr std::size_t kKept = 4;
-    static constexpr std::size_t kLargestKept = std::size_t(1) << 22;  // floats
+    static constexpr std::size_t kLargestKept = std::size_t(1) << 20;  // floats
     static std::vector<std::vector<float>>& pool() {
         static std::vector<std::vector<float>> buffers;
         return buffers;

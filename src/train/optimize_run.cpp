@@ -156,6 +156,7 @@ struct MatchedSpots {
 // crops there: all of the after-matching map the final report needs.
 MatchedSpots matched_spots(const Trainer& trainer, const Image& matched_albedo) {
     MatchedSpots matched;
+    if (!trainer.texel_atlas()) return matched;  // pixel evaluation: no texture-space report
     matched.after_matching = true;
     const Image& input = trainer.albedo_target();
     const int window = std::max(8, input.width() / 16);

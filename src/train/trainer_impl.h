@@ -77,7 +77,8 @@ struct Trainer::Batch {
     std::vector<FieldOutputs> outputs;
     std::vector<FieldOutputGrads> grads;
     FieldCache field_cache;  // the forward's encodings, reused by the backward (no second gather)
-    // Patch view-space normals, P x R x R, zero vectors off the surface.
+    // Patch view-space normals, P x R x R, zero vectors off the surface; freed after the patch
+    // half (the view half's guidance reuses the memory).
     std::vector<Vec3f> patch_pred, patch_target, patch_grad;
     // Visual images at the output size, B x S x S x 3 (interleaved, image after image).
     // The albedo images only while an albedo term weighs (matching); released after.
@@ -100,7 +101,10 @@ struct Trainer::Batch {
     // (the Jacobi step's denominator; texture evaluation only).
     std::vector<float> curvature;
     std::size_t patch_hit_count = 0;  // hits of the patches come first
+    // The map gradients: each allocated by the first scatter into it (the normal map's after the
+    // patches' guidance, the albedo's after the views'), freed by update().
     MipGradient albedo_gradient, normal_gradient;
+    std::array<bool, 2> map_gradients_pending{};  // albedo, normal: reset by begin_map_gradients(), not yet allocated
     std::vector<TrilinearTaps> scatter_taps;               // scatter_map_gradients: one block's taps
     std::vector<std::array<float, 4>> scatter_values;      // ... and the values they carry
     std::vector<FieldOutputGrads> texel_grads;

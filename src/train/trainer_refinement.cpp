@@ -15,10 +15,14 @@ namespace tdf {
 using namespace trainer_detail;
 
 // ---- 5. Backward to the parameters ----------------------------------------------------------
-void Trainer::begin_map_gradients() {
+void Trainer::begin_map_gradients() { m_batch->map_gradients_pending = {true, true}; }
+
+void Trainer::reset_map_gradient(int map) {
     Batch& b = *m_batch;
-    b.albedo_gradient.reset(m_maps->albedo(), 4);
-    b.normal_gradient.reset(m_maps->normal(), 4);
+    if (!b.map_gradients_pending[std::size_t(map)]) return;
+    if (map == 0) b.albedo_gradient.reset(m_maps->albedo(), 4);
+    else b.normal_gradient.reset(m_maps->normal(), 4);
+    b.map_gradients_pending[std::size_t(map)] = false;
 }
 
 // The adjoint of the map lookups: each hit's gradient goes to the texels it blended. Albedo and
@@ -42,6 +46,7 @@ void Trainer::scatter_map_gradients() {
         // Patches are hits [0, patch_hits) and send normal gradients; views send albedo ones.
         const std::size_t first = map == 0 ? patch_hits : 0, last = map == 0 ? n : patch_hits;
         if (first >= last) continue;
+        reset_map_gradient(map);
         const MipGradient::Bands bands = target.bands(band_count);
         for (std::size_t block = first; block < last; block += kBlock) {
             const std::size_t count = std::min(kBlock, last - block);
@@ -79,6 +84,7 @@ void Trainer::backward(int i) {
         return;
     }
     // The hits were scattered into the map gradients view by view (scatter_map_gradients).
+    for (int map = 0; map < 2; ++map) reset_map_gradient(map);  // a map no hit reached: zero
     b.albedo_gradient.collapse();
     b.normal_gradient.collapse();
     // Only Adam steps along the residual's gradient; the Jacobi step reads the map gradients
@@ -112,6 +118,9 @@ void Trainer::update(int i) {
         m_maps->evaluate_field(*m_field, m_config.refine_grid);
     }
     m_maps->update();
+    // Stepped on: the map gradients are not needed again before the next iteration's scatter.
+    m_batch->albedo_gradient.release();
+    m_batch->normal_gradient.release();
 }
 
 }  // namespace tdf

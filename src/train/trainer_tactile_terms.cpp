@@ -134,6 +134,7 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
             }
         });
     }
+    for (std::vector<Vec3f>* images : {&b.patch_pred, &b.patch_target, &b.patch_grad}) std::vector<Vec3f>().swap(*images);
 }
 
 // Multi-part (docs/multi-part-textures.md): each patch pixel's part from the gate's labels at

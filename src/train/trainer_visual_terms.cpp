@@ -51,9 +51,23 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
                 : mean_colour_mse_loss(b.albedo_pred.data(), b.albedo_target.data(), shape, b.albedo_grad.data(),
                                        phase.albedo_weight);
         record.terms[phase.per_pixel_albedo ? "albedo_matching" : "albedo_mean_colour"] = phase.albedo_weight * value;
+        // Into the hits now, so the albedo images are gone before the guidance runs (the first
+        // refinement iteration has both terms). Each hit's sum starts at +0 and takes the albedo
+        // term, then the lambertian's: the bits of adding their sum at once.
+        add_view_gradient(b.albedo_grad, false);
+        if (visual_guidance)
+            for (std::vector<float>* images : {&b.albedo_pred, &b.albedo_target, &b.albedo_grad})
+                std::vector<float>().swap(*images);
     }
-    if (visual_guidance && B > 0) visual_guidance_terms(phase, std::move(guidance_images), record);
-    visual_terms_backward(phase);
+    if (visual_guidance && B > 0) {
+        visual_guidance_terms(phase, std::move(guidance_images), record);
+        add_view_gradient(b.lambertian_grad, true);
+    }
+    if (texture_space()) set_view_curvature(phase);
+    // Read by nothing after the backward: freed, so the next iteration's patch half (its
+    // guidance request) reuses the memory. The albedo images stay through the matching phase,
+    // which has no guidance (sized once, no allocation an iteration).
+    for (std::vector<float>* images : {&b.lambertian, &b.lambertian_grad}) std::vector<float>().swap(*images);
 }
 
 // The views at the output size: the learned albedo, the input's, and with visual guidance the
@@ -189,31 +203,47 @@ void Trainer::visual_guidance_terms(const Phase& phase, GuidanceImages guidance_
     m_times.guidance += seconds_since(g0);
 }
 
-// The visual terms' gradients back through the resize (its adjoint) to the internal pixels, then
-// to the surface's albedo; texture evaluation also sets the view hits' Jacobi curvature.
-void Trainer::visual_terms_backward(const Phase& phase) {
+// One image gradient of the views (B x S x S x 3 at the output size: the albedo term's, or with
+// `lambertian` the lambertian's, times each hit's shade) back through the resize (its adjoint) to
+// the internal pixels, then added to the hits' albedo gradients.
+void Trainer::add_view_gradient(const std::vector<float>& grad, bool lambertian) {
     const RunConfig& cfg = m_config;
     Batch& b = *m_batch;
     const int P = cfg.patch_batch_size, B = cfg.batch_size, S = cfg.resolution;
-    const bool visual_guidance = phase.visual_guidance;
     const std::size_t view_values = std::size_t(S) * std::size_t(S) * 3;
     for (int k = 0; k < B; ++k) {
         const std::size_t gi = std::size_t(P + k);
         const GBuffer& g = b.gbuffers[gi];
         const std::vector<int>& point_of = b.point_of[gi];
         const bool resized = g.width != S || g.height != S;
-        const auto to_internal = [&](const std::vector<float>& grad) {
-            Image out(S, S, 3);
-            std::copy_n(grad.data() + std::size_t(k) * view_values, view_values, out.data());
-            return resized ? resize_bilinear_adjoint(out, g.width, g.height) : out;
-        };
-        const bool albedo_terms = !b.albedo_grad.empty();
-        const Image albedo_grad = albedo_terms ? to_internal(b.albedo_grad) : Image();
-        const Image lambertian_grad = visual_guidance ? to_internal(b.lambertian_grad) : Image();
-        // Jacobi denominators: per value, 2 w / N for squared errors (an L1 term counts as a
-        // squared error at a 0.1 scale), spread over the internal pixels as the resize spreads
-        // the gradients.
-        const double values = double(B) * double(view_values);
+        Image view(S, S, 3);
+        std::copy_n(grad.data() + std::size_t(k) * view_values, view_values, view.data());
+        const Image internal = resized ? resize_bilinear_adjoint(view, g.width, g.height) : std::move(view);
+        parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t p = begin; p < end; ++p) {
+                const int q = point_of[p];
+                if (q < 0) continue;
+                const float* v = internal.data() + 3 * p;
+                const Vec3f d{v[0], v[1], v[2]};
+                b.grads[std::size_t(q)].d_albedo += lambertian ? lambertian_backward(b.shade[std::size_t(q)], d) : d;
+            }
+        });
+    }
+}
+
+// Texture evaluation: the view hits' Jacobi curvature. Per value, 2 w / N for squared errors (an
+// L1 term counts as a squared error at a 0.1 scale), spread over the internal pixels as the
+// resize spreads the gradients.
+void Trainer::set_view_curvature(const Phase& phase) {
+    const RunConfig& cfg = m_config;
+    Batch& b = *m_batch;
+    const int P = cfg.patch_batch_size, B = cfg.batch_size, S = cfg.resolution;
+    const bool visual_guidance = phase.visual_guidance;
+    const double values = double(B) * double(S) * double(S) * 3.0;
+    for (int k = 0; k < B; ++k) {
+        const std::size_t gi = std::size_t(P + k);
+        const GBuffer& g = b.gbuffers[gi];
+        const std::vector<int>& point_of = b.point_of[gi];
         const double ssaa_share = double(S) * double(S) / (double(g.width) * double(g.height));
         const double albedo_kappa =
             (phase.per_pixel_albedo ? 2.0 * double(phase.albedo_weight) / values : 0.0) * ssaa_share;
@@ -225,21 +255,8 @@ void Trainer::visual_terms_backward(const Phase& phase) {
             for (std::size_t p = begin; p < end; ++p) {
                 const int q = point_of[p];
                 if (q < 0) continue;
-                if (texture_space()) {
-                    const double shade = visual_guidance ? double(b.shade[std::size_t(q)]) : 0.0;
-                    b.curvature[std::size_t(q)] = float(albedo_kappa + lambertian_kappa * shade * shade);
-                }
-                // Without albedo terms the albedo gradient is zero: d starts at +0 as it did.
-                Vec3f d;
-                if (albedo_terms) {
-                    const float* ga = albedo_grad.data() + 3 * p;
-                    d = Vec3f{ga[0], ga[1], ga[2]};
-                }
-                if (visual_guidance) {
-                    const float* gl = lambertian_grad.data() + 3 * p;
-                    d += lambertian_backward(b.shade[std::size_t(q)], Vec3f{gl[0], gl[1], gl[2]});
-                }
-                b.grads[std::size_t(q)].d_albedo += d;
+                const double shade = visual_guidance ? double(b.shade[std::size_t(q)]) : 0.0;
+                b.curvature[std::size_t(q)] = float(albedo_kappa + lambertian_kappa * shade * shade);
             }
         });
     }

@@ -115,6 +115,23 @@ TEST(Optimize, ExportsReferenceFilesAndMaterialWithNormalMap) {
     EXPECT_NE(log.find("tactile_matching"), std::string::npos);
 }
 
+// The reference schedule (pixel evaluation: no texel atlas, so no texture-space report or spot
+// strips) runs end to end through both phases and exports, its refinement with the albedo term
+// (albedo_refine 500) beside visual guidance, at SSAA 2.
+TEST(Optimize, ReferenceScheduleRunsThroughBothPhases) {
+    std::vector<std::string> overrides = small_run(3, 1);
+    overrides.push_back("schedule=reference");
+    const std::string base = run_into("reference_schedule", overrides);
+    for (const char* suffix : {".obj", "_albedo.png", "_tactile_normal.png", "_report.json", "_initialized_report.json"})
+        EXPECT_TRUE(fs::exists(base + suffix)) << base + suffix;
+    const std::string log = read_text_file(base + "_losses.jsonl");
+    EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 3);
+    EXPECT_NE(log.find("albedo_mean_colour"), std::string::npos) << log;
+    EXPECT_NE(log.find("visual_guidance_l1"), std::string::npos) << log;
+    const Json report = Json::parse(read_text_file(base + "_report.json"));
+    EXPECT_FALSE(report.contains("colour")) << "pixel evaluation has no texture-space colour check";
+}
+
 // Issue 24's check, from the files alone: normals recomputed from the exported height map
 // (central differences at its texel size, in mm) agree with the exported 8-bit normal map,
 // mean cosine >= 0.995 over the whole texture; the report and the GLB carry the scale. At 512

@@ -27,6 +27,9 @@ public:
     /// texture's; more lets a caller accumulate extra per-texel sums, such as a curvature, through
     /// the same taps). Reuses its storage when the shape is unchanged.
     void reset(const MipTexture& texture, int channels = 0);
+    /// Frees the pyramid (empty until the next reset): a caller between steps holds no gradient.
+    void release() { std::vector<Image>().swap(m_levels); }
+    bool empty() const { return m_levels.empty(); }
     /// Adds weight_k x grad to each tap (grad has channels() floats).
     void add(const TrilinearTaps& taps, const float* grad);
     /// Texel ranges splitting every level into `count` bands (for add_band).

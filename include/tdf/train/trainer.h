@@ -251,9 +251,11 @@ private:
     void visual_terms(const Phase& phase, LossRecord& record);
     void render_visual_views(bool albedo_terms, bool visual_guidance, GuidanceImages& guidance_images);
     void visual_guidance_terms(const Phase& phase, GuidanceImages guidance_images, LossRecord& record);
-    void visual_terms_backward(const Phase& phase);
+    void add_view_gradient(const std::vector<float>& grad, bool lambertian);
+    void set_view_curvature(const Phase& phase);
     // trainer_refinement.cpp
     void begin_map_gradients();
+    void reset_map_gradient(int map);
     void scatter_map_gradients();
     /// Lets the visual views reuse the patches' G-buffers and back (texture evaluation).
     void swap_patch_and_view_buffers();
