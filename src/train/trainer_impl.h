@@ -81,7 +81,8 @@ struct Trainer::Batch {
     // half (the view half's guidance reuses the memory).
     std::vector<Vec3f> patch_pred, patch_target, patch_grad;
     // Visual images at the output size, B x S x S x 3 (interleaved, image after image).
-    // The albedo images only while an albedo term weighs (matching); released after.
+    // The albedo images only while an albedo term weighs (matching); the lambertian ones from the
+    // visual guidance's answer to the end of the view half.
     std::vector<float> albedo_pred, albedo_target, albedo_grad, lambertian, lambertian_grad;
     std::vector<float> shade;  // per point: the lambertian shade of visual hits
     Image internal;            // one view at its internal (SSAA) size
@@ -125,6 +126,7 @@ struct Trainer::GuidanceImages {
     std::vector<Image> masks;     // coverage
     std::vector<Image> surfaces;  // the mesh's own view-space normals (no relief)
     std::vector<Image> references;  // the input's lambertian under the same light (relief anchor)
+    std::vector<Image> lambertians;  // the learned maps' lambertian renders (what guidance refines)
 };
 
 }  // namespace tdf

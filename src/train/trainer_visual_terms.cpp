@@ -35,11 +35,7 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
         for (std::vector<float>* images : {&b.albedo_pred, &b.albedo_target, &b.albedo_grad})
             std::vector<float>().swap(*images);
     }
-    if (visual_guidance) {
-        b.lambertian.resize(batch_values);
-        b.lambertian_grad.assign(batch_values, 0.0f);
-        b.shade.assign(b.hit_pixel.size(), 0.0f);
-    }
+    if (visual_guidance) b.shade.assign(b.hit_pixel.size(), 0.0f);
     GuidanceImages guidance_images;
     render_visual_views(albedo_terms, visual_guidance, guidance_images);
     const ImageBatchShape shape{B, S, S, 3};
@@ -117,6 +113,9 @@ void Trainer::render_visual_views(bool albedo_terms, bool visual_guidance, Guida
         if (visual_guidance) {
             const Vec3f light = b.lights[std::size_t(k)];
             const ViewRotation rot = view_rotation(view.camera);
+            // Straight into the request's image; the loss's contiguous copy is made after the
+            // guidance has run (visual_guidance_terms), when the request's other images are gone.
+            Image rendered(S, S, 3);
             render_internal(
                 [&](std::size_t p, std::size_t q) {
                     // The shading normal is detached (spec 3.4): only the albedo gets gradient.
@@ -124,7 +123,8 @@ void Trainer::render_visual_views(bool albedo_terms, bool visual_guidance, Guida
                     b.shade[q] = training_shade(n_s, light, g.position[p]);
                     return lambertian(b.outputs[q].albedo, b.shade[q]);
                 },
-                b.lambertian.data() + std::size_t(k) * view_values);
+                rendered.data());
+            guidance_images.lambertians.push_back(std::move(rendered));
             // The input asset under the same light and relief: what relief-aware refinement keeps,
             // rendered straight into the request's reference image.
             Image reference(S, S, 3);
@@ -168,11 +168,7 @@ void Trainer::visual_guidance_terms(const Phase& phase, GuidanceImages guidance_
     request.strength = visual_guidance_strength(phase.i, cfg.init_iterations, cfg.iterations);
     request.iteration = phase.i;
     request.seed = m_seed ^ (std::uint64_t(phase.i) << 20) ^ 0x5649u;
-    for (int k = 0; k < B; ++k) {
-        Image image(S, S, 3);
-        std::copy_n(b.lambertian.data() + std::size_t(k) * view_values, view_values, image.data());
-        request.images.push_back(std::move(image));
-    }
+    request.images = std::move(guidance_images.lambertians);
     request.reference_images = std::move(guidance_images.references);
     request.control = std::move(guidance_images.controls);
     request.masks = std::move(guidance_images.masks);
@@ -180,7 +176,15 @@ void Trainer::visual_guidance_terms(const Phase& phase, GuidanceImages guidance_
     GuidanceResult result = m_visual_guidance->refine(request);
     validate_result(request, result, m_visual_guidance->name());
     if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, phase.i, request, result);
-    std::vector<float> refined(b.lambertian.size());
+    // The loss reads the renders and the refined images each as one array over the views.
+    const std::size_t batch_values = std::size_t(B) * view_values;
+    b.lambertian.resize(batch_values);
+    for (int k = 0; k < B; ++k) copy_into(request.images[std::size_t(k)], b.lambertian.data() + std::size_t(k) * view_values);
+    for (std::vector<Image>* images :
+         {&request.images, &request.reference_images, &request.control, &request.surface_normals})
+        std::vector<Image>().swap(*images);
+    b.lambertian_grad.assign(batch_values, 0.0f);
+    std::vector<float> refined(batch_values);
     for (int k = 0; k < B; ++k) {
         // Background forced to white (spec 5.4).
         Image& r = result.refined[std::size_t(k)];
