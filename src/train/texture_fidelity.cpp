@@ -28,43 +28,37 @@ double psnr_over(const Image& a, const Image& b, const std::vector<std::uint8_t>
     return 10.0 * std::log10(1.0 / std::max(mse, 1e-12));
 }
 
-// Mean over covered neighbour pairs of the summed |difference| of the channels, horizontal plus
-// vertical (the script's `hf`). `pair_ok` further restricts which texels count.
-template <typename Include>
-double mean_abs_difference(const Image& image, const std::vector<std::uint8_t>& covered, Include include) {
-    const int w = image.width(), h = image.height(), ch = image.channels();
+// Mean over covered neighbour pairs of the summed |difference| of the 3 channels, horizontal plus
+// vertical (the script's `hf`). `value(t)` is texel t's value (read or derived on the fly, so a
+// measure over a 4096^2 map makes no map-sized copy); `include` further restricts which texels
+// count.
+template <typename Value, typename Include>
+double mean_abs_difference(int w, int h, const std::vector<std::uint8_t>& covered, Value value, Include include) {
     double sx = 0, sy = 0;
     std::size_t nx = 0, ny = 0;
+    const auto summed = [&](std::size_t a, std::size_t b) {
+        const Vec3f va = value(a), vb = value(b);
+        double d = 0;
+        for (int c = 0; c < 3; ++c) d += std::fabs(double(vb[c]) - va[c]);
+        return d;
+    };
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const std::size_t t = std::size_t(y) * std::size_t(w) + std::size_t(x);
             if (!covered[t] || !include(t)) continue;
-            if (x + 1 < w && covered[t + 1] && include(t + 1)) {
-                double d = 0;
-                for (int c = 0; c < ch; ++c) d += std::fabs(double(image.data()[(t + 1) * std::size_t(ch) + std::size_t(c)]) -
-                                                            image.data()[t * std::size_t(ch) + std::size_t(c)]);
-                sx += d, ++nx;
-            }
-            if (y + 1 < h && covered[t + std::size_t(w)] && include(t + std::size_t(w))) {
-                double d = 0;
-                for (int c = 0; c < ch; ++c)
-                    d += std::fabs(double(image.data()[(t + std::size_t(w)) * std::size_t(ch) + std::size_t(c)]) -
-                                   image.data()[t * std::size_t(ch) + std::size_t(c)]);
-                sy += d, ++ny;
-            }
+            if (x + 1 < w && covered[t + 1] && include(t + 1)) sx += summed(t, t + 1), ++nx;
+            if (y + 1 < h && covered[t + std::size_t(w)] && include(t + std::size_t(w)))
+                sy += summed(t, t + std::size_t(w)), ++ny;
         }
     return (nx ? sx / double(nx) : 0.0) + (ny ? sy / double(ny) : 0.0);
 }
 
-Image unit_normals(const Image& n) {
-    Image out = n;
-    for (std::size_t p = 0; p < out.pixel_count(); ++p) {
-        float* v = out.data() + 3 * p;
-        const Vec3f u = normalize_or_zero({v[0], v[1], v[2]}, 1e-12f);
-        v[0] = u.x, v[1] = u.y, v[2] = u.z;
-    }
-    return out;
+// Texel t of a 3-channel map as stored, and as a unit normal (torch F.normalize, eps 1e-12).
+Vec3f texel(const Image& map, std::size_t t) {
+    const float* v = map.data() + 3 * t;
+    return {v[0], v[1], v[2]};
 }
+Vec3f unit_texel(const Image& map, std::size_t t) { return normalize_or_zero(texel(map, t), 1e-12f); }
 
 }  // namespace
 
@@ -80,22 +74,26 @@ TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albed
     for (std::uint8_t c : covered) compared += c ? 1 : 0;
     f.coverage = double(compared) / double(std::max<std::size_t>(covered.size(), 1));
     f.albedo_psnr = psnr_over(albedo, albedo_target, covered);
-    const Image everywhere(w, h, 1, 1.0f);
-    f.albedo_psnr_lowpass = psnr_over(gaussian_blur_masked(albedo, everywhere, lowpass_sigma),
-                                      gaussian_blur_masked(albedo_target, everywhere, lowpass_sigma), covered);
+    // An empty mask weighs every texel 1 (the bits of a mask of ones, without its copy).
+    f.albedo_psnr_lowpass = psnr_over(gaussian_blur_masked(albedo, Image(), lowpass_sigma),
+                                      gaussian_blur_masked(albedo_target, Image(), lowpass_sigma), covered);
     const auto all = [](std::size_t) { return true; };
-    f.albedo_hf_ratio = mean_abs_difference(albedo, covered, all) /
-                        std::max(mean_abs_difference(albedo_target, covered, all), 1e-12);
+    const auto albedo_at = [&](std::size_t t) { return texel(albedo, t); };
+    const auto target_at = [&](std::size_t t) { return texel(albedo_target, t); };
+    f.albedo_hf_ratio = mean_abs_difference(w, h, covered, albedo_at, all) /
+                        std::max(mean_abs_difference(w, h, covered, target_at, all), 1e-12);
     if (normal.empty() || normal_target.empty()) return f;
-    if (normal.width() != w || normal.height() != h || normal_target.width() != w || normal_target.height() != h)
+    if (normal.width() != w || normal.height() != h || normal_target.width() != w || normal_target.height() != h ||
+        normal.channels() != 3 || normal_target.channels() != 3)
         throw_error("texture fidelity: the normal maps differ in size from the albedo maps");
-    const Image n = unit_normals(normal), m = unit_normals(normal_target);
+    // The normals are renormalised texel by texel where they are read (no unit copies of the maps).
+    const auto n = [&](std::size_t t) { return unit_texel(normal, t); };
+    const auto m = [&](std::size_t t) { return unit_texel(normal_target, t); };
     std::vector<double> cosines;
     cosines.reserve(compared);
     for (std::size_t t = 0; t < covered.size(); ++t) {
         if (!covered[t]) continue;
-        const float* a = n.data() + 3 * t;
-        const float* b = m.data() + 3 * t;
+        const Vec3f a = n(t), b = m(t);
         cosines.push_back(double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]);
     }
     double sum = 0;
@@ -106,15 +104,16 @@ TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albed
         std::nth_element(cosines.begin(), cosines.begin() + std::ptrdiff_t(rank), cosines.end());
         f.normal_p10_cos = cosines[rank];
     }
+    cosines = {};
     f.normal_hf_ratio =
-        mean_abs_difference(n, covered, all) / std::max(mean_abs_difference(m, covered, all), 1e-12);
+        mean_abs_difference(w, h, covered, n, all) / std::max(mean_abs_difference(w, h, covered, m, all), 1e-12);
 
     // Flat relief: no texel within kFlatRadius (Chebyshev) steeper than 1 degree, so detail that
     // relief-aware shading spreads around a bump (a few texels) does not count as added on flat.
     constexpr int kFlatRadius = 8;
     const float flat_z = std::cos(1.0f * 3.14159265f / 180.0f);
     std::vector<std::uint8_t> steep(covered.size(), 0), steep_rows(covered.size(), 0);
-    for (std::size_t t = 0; t < covered.size(); ++t) steep[t] = m.data()[3 * t + 2] < flat_z ? 1 : 0;
+    for (std::size_t t = 0; t < covered.size(); ++t) steep[t] = m(t).z < flat_z ? 1 : 0;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             std::uint8_t any = 0;
@@ -137,11 +136,12 @@ TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albed
     std::size_t flat_count = 0;
     for (std::size_t t = 0; t < covered.size(); ++t) flat_count += (flat[t] && covered[t]) ? 1 : 0;
     f.flat_fraction = double(flat_count) / double(std::max<std::size_t>(compared, 1));
-    Image added(w, h, 3);
-    for (std::size_t i = 0; i < added.values().size(); ++i) added.values()[i] = albedo.values()[i] - albedo_target.values()[i];
+    // What the learned albedo adds to the input, texel by texel in float (as an image of the
+    // differences would hold it).
+    const auto added = [&](std::size_t t) { return texel(albedo, t) - texel(albedo_target, t); };
     const auto is_flat = [&](std::size_t t) { return flat[t] != 0; };
-    f.albedo_added_hf_flat = mean_abs_difference(added, covered, is_flat);
-    f.albedo_hf_flat = mean_abs_difference(albedo_target, covered, is_flat);
+    f.albedo_added_hf_flat = mean_abs_difference(w, h, covered, added, is_flat);
+    f.albedo_hf_flat = mean_abs_difference(w, h, covered, target_at, is_flat);
     return f;
 }
 
