@@ -1,5 +1,6 @@
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/core/release.h>
 #include <tdf/core/rng.h>
 #include <tdf/field/texture_field.h>
 
@@ -301,7 +302,7 @@ std::size_t cache_floats(std::size_t n, int features) {
 }  // namespace
 
 void FieldCache::clear() {
-    m_features = {};
+    release(m_features);
     m_points = 0;
     m_field = nullptr;
 }

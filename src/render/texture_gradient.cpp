@@ -68,7 +68,12 @@ void MipGradient::accumulate(const MipGradient& other) {
 
 const Image& MipGradient::collapse() {
     TDF_CHECK(!m_levels.empty());
-    for (std::size_t k = m_levels.size() - 1; k > 0; --k) downsample_box_adjoint(m_levels[k], m_levels[k - 1]);
+    // Each coarser level is read once, into the one below, then freed (a 4096^2 map's levels
+    // above 0 hold a third of its gradient's memory).
+    while (m_levels.size() > 1) {
+        downsample_box_adjoint(m_levels.back(), m_levels[m_levels.size() - 2]);
+        m_levels.pop_back();
+    }
     return m_levels[0];
 }
 

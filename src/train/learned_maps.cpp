@@ -3,6 +3,7 @@
 #include <tdf/core/error.h>
 #include <tdf/core/image_ops.h>
 #include <tdf/core/parallel.h>
+#include <tdf/core/release.h>
 
 #include <algorithm>
 #include <atomic>
@@ -57,15 +58,15 @@ void LearnedMaps::set_albedo_bounds(Image low, Image high) {
 }
 
 void LearnedMaps::release_training_state() {
-    m_residual = {};
-    m_field_outputs = {};
+    release(m_residual);
+    release(m_field_outputs);
     m_cache.clear();
     m_albedo_low = Image();
     m_albedo_high = Image();
 }
 
 void LearnedMaps::release_derived() {
-    m_field_outputs = {};
+    release(m_field_outputs);
     m_cache.clear();
     m_albedo.drop_levels();
     m_normal.drop_levels();

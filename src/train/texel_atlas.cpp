@@ -2,6 +2,7 @@
 
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
+#include <tdf/core/release.h>
 
 #include <algorithm>
 
@@ -75,8 +76,8 @@ TexelAtlas TexelAtlas::build(const TriangleMesh& mesh, int size) {
 }
 
 void TexelAtlas::release_target_inputs() {
-    raster.barycentric = {};
-    uvs = {};
+    release(raster.barycentric);
+    release(uvs);
 }
 
 void TexelAtlas::fill_gutter(Image& map) const {

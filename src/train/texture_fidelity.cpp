@@ -1,8 +1,9 @@
 #include <tdf/train/texture_fidelity.h>
 
 #include <tdf/core/error.h>
-#include <tdf/core/vec.h>
 #include <tdf/core/image_ops.h>
+#include <tdf/core/release.h>
+#include <tdf/core/vec.h>
 #include <tdf/mesh/triangle_mesh.h>
 #include <tdf/render/gbuffer.h>
 
@@ -104,7 +105,7 @@ TextureFidelity measure_texture_fidelity(const Image& albedo, const Image& albed
         std::nth_element(cosines.begin(), cosines.begin() + std::ptrdiff_t(rank), cosines.end());
         f.normal_p10_cos = cosines[rank];
     }
-    cosines = {};
+    release(cosines);
     f.normal_hf_ratio =
         mean_abs_difference(w, h, covered, n, all) / std::max(mean_abs_difference(w, h, covered, m, all), 1e-12);
 

@@ -7,6 +7,7 @@
 #include <tdf/atlas/uv_metrics.h>
 #include <tdf/core/error.h>
 #include <tdf/core/log.h>
+#include <tdf/core/release.h>
 #include <tdf/train/part_gating.h>
 #include <tdf/train/part_label_head.h>
 #include <tdf/train/tactile_seam_blend.h>
@@ -257,7 +258,7 @@ void Trainer::restore_derived_state() {
 void Trainer::finish_training() {
     release_training_buffers();
     m_residual_adam.reset();
-    m_residual_gradient = {};
+    release(m_residual_gradient);
     if (m_maps) m_maps->release_training_state();
     m_training_finished = true;
 }

@@ -6,6 +6,7 @@
 // evaluation, Batch::curvature of the patch hits; StageTimes::guidance; guidance frames.
 #include "trainer_impl.h"
 
+#include <tdf/core/release.h>
 #include <tdf/guidance/guidance_frames.h>
 #include <tdf/guidance/schedule.h>
 #include <tdf/loss/tactile_loss.h>
@@ -134,7 +135,7 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
             }
         });
     }
-    for (std::vector<Vec3f>* images : {&b.patch_pred, &b.patch_target, &b.patch_grad}) std::vector<Vec3f>().swap(*images);
+    release(b.patch_pred, b.patch_target, b.patch_grad);
 }
 
 // Multi-part (docs/multi-part-textures.md): each patch pixel's part from the gate's labels at

@@ -7,6 +7,7 @@
 #include "trainer_impl.h"
 
 #include <tdf/core/image_ops.h>
+#include <tdf/core/release.h>
 #include <tdf/guidance/guidance_frames.h>
 #include <tdf/guidance/relief_shading.h>
 #include <tdf/guidance/schedule.h>
@@ -32,8 +33,7 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
         b.albedo_target.resize(batch_values);
         b.albedo_grad.assign(batch_values, 0.0f);
     } else {
-        for (std::vector<float>* images : {&b.albedo_pred, &b.albedo_target, &b.albedo_grad})
-            std::vector<float>().swap(*images);
+        release(b.albedo_pred, b.albedo_target, b.albedo_grad);
     }
     if (visual_guidance) b.shade.assign(b.hit_pixel.size(), 0.0f);
     GuidanceImages guidance_images;
@@ -51,9 +51,7 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
         // refinement iteration has both terms). Each hit's sum starts at +0 and takes the albedo
         // term, then the lambertian's: the bits of adding their sum at once.
         add_view_gradient(b.albedo_grad, false);
-        if (visual_guidance)
-            for (std::vector<float>* images : {&b.albedo_pred, &b.albedo_target, &b.albedo_grad})
-                std::vector<float>().swap(*images);
+        if (visual_guidance) release(b.albedo_pred, b.albedo_target, b.albedo_grad);
     }
     if (visual_guidance && B > 0) {
         visual_guidance_terms(phase, std::move(guidance_images), record);
@@ -63,7 +61,7 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
     // Read by nothing after the backward: freed, so the next iteration's patch half (its
     // guidance request) reuses the memory. The albedo images stay through the matching phase,
     // which has no guidance (sized once, no allocation an iteration).
-    for (std::vector<float>* images : {&b.lambertian, &b.lambertian_grad}) std::vector<float>().swap(*images);
+    release(b.lambertian, b.lambertian_grad);
 }
 
 // The views at the output size: the learned albedo, the input's, and with visual guidance the
@@ -180,9 +178,7 @@ void Trainer::visual_guidance_terms(const Phase& phase, GuidanceImages guidance_
     const std::size_t batch_values = std::size_t(B) * view_values;
     b.lambertian.resize(batch_values);
     for (int k = 0; k < B; ++k) copy_into(request.images[std::size_t(k)], b.lambertian.data() + std::size_t(k) * view_values);
-    for (std::vector<Image>* images :
-         {&request.images, &request.reference_images, &request.control, &request.surface_normals})
-        std::vector<Image>().swap(*images);
+    release(request.images, request.reference_images, request.control, request.surface_normals);
     b.lambertian_grad.assign(batch_values, 0.0f);
     std::vector<float> refined(batch_values);
     for (int k = 0; k < B; ++k) {

@@ -12,6 +12,7 @@
 /// Determinism: `add` is meant for one thread at a time per MipGradient (callers scatter views in
 /// a fixed order, or give independent maps to independent tasks); `collapse` is parallel over rows
 /// with disjoint writes. Results are identical on any thread count.
+#include <tdf/core/release.h>
 #include <tdf/render/texture.h>
 
 #include <cstdint>
@@ -28,7 +29,7 @@ public:
     /// the same taps). Reuses its storage when the shape is unchanged.
     void reset(const MipTexture& texture, int channels = 0);
     /// Frees the pyramid (empty until the next reset): a caller between steps holds no gradient.
-    void release() { std::vector<Image>().swap(m_levels); }
+    void release() { tdf::release(m_levels); }
     bool empty() const { return m_levels.empty(); }
     /// Adds weight_k x grad to each tap (grad has channels() floats).
     void add(const TrilinearTaps& taps, const float* grad);
@@ -45,8 +46,9 @@ public:
     /// Adds every other's gradient into this one (same shape); used to reduce per-task gradients
     /// in a fixed order.
     void accumulate(const MipGradient& other);
-    /// Pushes every level's gradient down to level 0 (the adjoint of the box pyramid) and returns
-    /// level 0: dL/d(texel) of the base image, width x height x channels.
+    /// Pushes every level's gradient down to level 0 (the adjoint of the box pyramid), frees the
+    /// coarser levels, and returns level 0: dL/d(texel) of the base image, width x height x channels.
+    /// The next add() needs a reset().
     const Image& collapse();
     int channels() const { return m_levels.empty() ? 0 : m_levels[0].channels(); }
     /// Level 0's gradient (after collapse(): of the base image); writable, so a caller can fold
