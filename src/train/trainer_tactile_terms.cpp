@@ -114,9 +114,13 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
         if (phase.tactile_guidance)
             kappa += double(cfg.weights.tactile_guidance) / pixels *
                      (cfg.tactile_guidance_loss == TactileGuidanceLoss::Cosine ? 1.0 : 2.0 / 3.0);
-        for (int k = 0; k < P; ++k)
-            for (int q : b.point_of[std::size_t(k)])
-                if (q >= 0) b.curvature[std::size_t(q)] = float(kappa);
+        for (int k = 0; k < P; ++k) {
+            const std::vector<int>& point_of = b.point_of[std::size_t(k)];
+            parallel_for(point_of.size(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t p = begin; p < end; ++p)
+                    if (point_of[p] >= 0) b.curvature[std::size_t(point_of[p])] = float(kappa);
+            });
+        }
     }
     // Back through the view rotation and the TBN composition to the surface's tangent normal.
     for (int k = 0; k < P; ++k) {

@@ -215,15 +215,20 @@ void Trainer::add_view_gradient(const std::vector<float>& grad, bool lambertian)
         const std::size_t gi = std::size_t(P + k);
         const GBuffer& g = b.gbuffers[gi];
         const std::vector<int>& point_of = b.point_of[gi];
-        const bool resized = g.width != S || g.height != S;
-        Image view(S, S, 3);
-        std::copy_n(grad.data() + std::size_t(k) * view_values, view_values, view.data());
-        const Image internal = resized ? resize_bilinear_adjoint(view, g.width, g.height) : std::move(view);
+        // Without SSAA the view's pixels are the internal ones: read in place.
+        const float* view = grad.data() + std::size_t(k) * view_values;
+        Image internal;
+        if (g.width != S || g.height != S) {
+            Image output(S, S, 3);
+            std::copy_n(view, view_values, output.data());
+            internal = resize_bilinear_adjoint(output, g.width, g.height);
+            view = internal.data();
+        }
         parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin; p < end; ++p) {
                 const int q = point_of[p];
                 if (q < 0) continue;
-                const float* v = internal.data() + 3 * p;
+                const float* v = view + 3 * p;
                 const Vec3f d{v[0], v[1], v[2]};
                 b.grads[std::size_t(q)].d_albedo += lambertian ? lambertian_backward(b.shade[std::size_t(q)], d) : d;
             }
