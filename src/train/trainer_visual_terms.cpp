@@ -111,41 +111,42 @@ void Trainer::render_visual_views(bool albedo_terms, bool visual_guidance, Guida
         if (visual_guidance) {
             const Vec3f light = b.lights[std::size_t(k)];
             const ViewRotation rot = view_rotation(view.camera);
-            // Straight into the request's image; the loss's contiguous copy is made after the
-            // guidance has run (visual_guidance_terms), when the request's other images are gone.
-            Image rendered(S, S, 3);
-            render_internal(
-                [&](std::size_t p, std::size_t q) {
-                    // The shading normal is detached (spec 3.4): only the albedo gets gradient.
-                    const Vec3f n_s = compose_shading_normal(frame_at(g, p), b.outputs[q].normal);
-                    b.shade[q] = training_shade(n_s, light, g.position[p]);
-                    return lambertian(b.outputs[q].albedo, b.shade[q]);
-                },
-                rendered.data());
-            guidance_images.lambertians.push_back(std::move(rendered));
-            // The input asset under the same light and relief: what relief-aware refinement keeps,
-            // rendered straight into the request's reference image.
-            Image reference(S, S, 3);
-            render_internal(
-                [&](std::size_t p, std::size_t q) { return lambertian(input_albedo(p, q), b.shade[q]); },
-                reference.data());
-            guidance_images.references.push_back(std::move(reference));
-            Image normals_internal(g.width, g.height, 3, 0.0f), mask_internal(g.width, g.height, 1, 0.0f);
-            Image surface_internal(g.width, g.height, 3, 0.0f);
+            // One pass over the internal pixels for everything the guidance reads: the lambertian
+            // of the learned maps and of the input (white background), the learned relief's
+            // view-space normals, the coverage, the mesh's own normals (zero background). The
+            // shading normal is composed once and serves the shade and the control image.
+            Image rendered(g.width, g.height, 3), reference(g.width, g.height, 3);
+            Image normals(g.width, g.height, 3), mask(g.width, g.height, 1), surface(g.width, g.height, 3);
             parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
                 for (std::size_t p = begin; p < end; ++p) {
                     const int q = point_of[p];
-                    if (q < 0) continue;
-                    const Vec3f n_v = tangent_to_view(g, p, rot, b.outputs[std::size_t(q)].normal);
-                    std::copy(&n_v.x, &n_v.x + 3, normals_internal.data() + 3 * p);
+                    if (q < 0) {
+                        std::fill_n(rendered.data() + 3 * p, 3, 1.0f);
+                        std::fill_n(reference.data() + 3 * p, 3, 1.0f);
+                        continue;
+                    }
+                    const std::size_t h = std::size_t(q);
+                    // The shading normal is detached (spec 3.4): only the albedo gets gradient.
+                    const Vec3f n_s = compose_shading_normal(frame_at(g, p), b.outputs[h].normal);
+                    b.shade[h] = training_shade(n_s, light, g.position[p]);
+                    const Vec3f lit = lambertian(b.outputs[h].albedo, b.shade[h]);
+                    const Vec3f input = lambertian(input_albedo(p, h), b.shade[h]);
+                    const Vec3f n_v = view_space_normal(rot, n_s);
                     const Vec3f s_v = view_space_normal(rot, g.normal[p]);
-                    std::copy(&s_v.x, &s_v.x + 3, surface_internal.data() + 3 * p);
-                    mask_internal.data()[p] = 1.0f;
+                    std::copy(&lit.x, &lit.x + 3, rendered.data() + 3 * p);
+                    std::copy(&input.x, &input.x + 3, reference.data() + 3 * p);
+                    std::copy(&n_v.x, &n_v.x + 3, normals.data() + 3 * p);
+                    std::copy(&s_v.x, &s_v.x + 3, surface.data() + 3 * p);
+                    mask.data()[p] = 1.0f;
                 }
             });
-            controls.push_back(to_bae_control(resized ? resize_bilinear(normals_internal, S, S) : normals_internal));
-            masks.push_back(resized ? resize_bilinear(mask_internal, S, S) : mask_internal);
-            surfaces.push_back(resized ? resize_bilinear(surface_internal, S, S) : surface_internal);
+            // At the output size (spec 3.8): the loss's and the request's images.
+            const auto output = [&](Image& internal) { return resized ? resize_bilinear(internal, S, S) : std::move(internal); };
+            guidance_images.lambertians.push_back(output(rendered));
+            guidance_images.references.push_back(output(reference));
+            controls.push_back(to_bae_control(output(normals)));
+            masks.push_back(output(mask));
+            surfaces.push_back(output(surface));
         }
     }
 }
