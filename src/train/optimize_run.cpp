@@ -448,12 +448,14 @@ void export_matched(Trainer& trainer, OptimizeRun& run, const TriangleMesh& expo
     const ExportScale height_scale = asset_export_scale(*run.assets, export_mesh, run.config);  // issue 24
     write_asset(run.options.output_dir, run.name, "_initialized", matched_maps, export_mesh, run.config,
                 run.face_materials, &height_scale);
+    // The texture-space measure reads only the maps, the targets' level 0 and the atlas: taken
+    // before the derived state comes back, so its map-sized buffers do not add to it.
+    const Json texture = texture_space_quality(trainer, matched_maps);
     trainer.restore_derived_state();
     run.end_stage("export_matched");
     const QualityReport matched = trainer.evaluate_held_out();
     Json initialized = {{"quality", matched.to_json()}, {"iteration", trainer.iteration()}};
-    if (const Json texture = texture_space_quality(trainer, matched_maps); !texture.is_null())
-        initialized["texture_space"] = texture;
+    if (!texture.is_null()) initialized["texture_space"] = texture;
     write_text_atomically(run.base + "_initialized_report.json", initialized.dump(2) + "\n");
     if (run.parts) {
         run.boundary_after_matching = run.boundary_json(matched_maps);

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -208,6 +209,28 @@ TEST(ImageOps, ExactHalfBoxDownsampleAndAdjointKeepTheGeneralPathsBits) {
                     EXPECT_EQ(std::memcmp(&got, &expected, sizeof(float)), 0) << px << "," << y << "," << c;
                 }
     }
+}
+
+// In place, the convolution runs row by row and over column strips without a full-size buffer;
+// every value must keep the two-buffer path's bits (float and double kernels, every addressing
+// mode, rows longer than a strip and not a multiple of it).
+TEST(ImageOps, InPlaceSeparableConvolutionKeepsTheBufferedBits) {
+    const std::vector<float> tent = {0.25f, 0.5f, 0.25f}, wide = {0.1f, 0.2f, 0.4f, 0.2f, 0.1f};
+    const std::vector<double> wide_double = {0.1, 0.2, 0.4, 0.2, 0.1};
+    for (const auto& [w, h, c] : std::vector<std::array<int, 3>>{{97, 13, 4}, {5, 40, 3}, {300, 7, 1}, {1, 1, 2}})
+        for (const Addressing mode : {Addressing::Border, Addressing::Clamp, Addressing::Wrap, Addressing::Mirror}) {
+            const Image input = random_image(w, h, c, std::uint64_t(w * 7 + h + c), -2.0f, 3.0f);
+            const auto check = [&](const auto& kernel, const char* name) {
+                Image buffered(w, h, c), in_place = input;
+                convolve_separable(input, buffered, kernel, mode);
+                convolve_separable(in_place, in_place, kernel, mode);
+                EXPECT_EQ(std::memcmp(buffered.data(), in_place.data(), buffered.values().size() * sizeof(float)), 0)
+                    << w << "x" << h << "x" << c << " " << name << " mode " << int(mode);
+            };
+            check(tent, "tent");
+            check(wide, "wide");
+            check(wide_double, "wide double");
+        }
 }
 
 TEST(ImageOps, AreaAndBilinearAdjointsAreTransposes) {

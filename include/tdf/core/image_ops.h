@@ -269,7 +269,7 @@ std::vector<T> gaussian_kernel(T sigma, int radius, bool normalise = true) {
 /// out = K_y * (K_x * in): the odd-length `kernel` along x then along y, every channel, pixels
 /// outside read per `mode`. Each output is accumulated from 0 in kernel order (float kernels in
 /// float, double kernels in double; the pass between is stored as float). `out` has in's shape
-/// and may be the same buffer as `in`.
+/// and may be the same buffer as `in`: then no full-size buffer is made (same bits).
 void convolve_separable(ConstImageView in, ImageView out, const std::vector<float>& kernel, Addressing mode);
 void convolve_separable(ConstImageView in, ImageView out, const std::vector<double>& kernel, Addressing mode);
 
