@@ -549,26 +549,17 @@ void convolve_separable_in_place(ImageView image, const Kernel& kernel, Addressi
     const std::size_t row = std::size_t(w) * std::size_t(c);
     horizontal_pass(w, h, std::size_t(c), kernel, mode,
                     [&](int y, float* interior) { std::copy_n(image.row(y), row, interior); }, image.data);
-    const int radius = int(kernel.size() / 2);
     constexpr std::size_t kStripFloats = 256;
     const std::size_t strips = (row + kStripFloats - 1) / kStripFloats;
-    const std::vector<float> zero_row(mode == Addressing::Border ? kStripFloats : 0, 0.0f);
     parallel_for(strips, 1, [&](std::size_t s0, std::size_t s1) {
         std::vector<float> columns;
-        std::vector<const float*> sources(kernel.size());
-        RowSummer sum;
         for (std::size_t strip = s0; strip < s1; ++strip) {
             const std::size_t first = strip * kStripFloats, count = std::min(kStripFloats, row - first);
             columns.resize(count * std::size_t(h));
             for (int y = 0; y < h; ++y) std::copy_n(image.row(y) + first, count, columns.data() + std::size_t(y) * count);
-            for (int y = 0; y < h; ++y) {
-                for (int k = -radius; k <= radius; ++k) {
-                    const int source = address(y + k, h, mode);
-                    sources[std::size_t(k + radius)] =
-                        source < 0 ? zero_row.data() : columns.data() + std::size_t(source) * count;
-                }
-                sum(sources.data(), kernel, count, image.row(y) + first);
-            }
+            vertical_pass(
+                columns.data(), count, h, kernel, mode, [&](int y, std::vector<float>&) { return image.row(y) + first; },
+                [](int, const float*) {});
         }
     });
 }

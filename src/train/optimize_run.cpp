@@ -145,9 +145,9 @@ Json texture_space_quality(const Trainer& trainer, const BakedMaps& maps) {
     return quality;
 }
 
-// The after-matching albedo at the report's spots (issue 29).
+// The after-matching albedo at the report's spots (issue 29); none when this process did not run
+// the matching phase's end (a resumed run) or without a texel atlas (pixel evaluation).
 struct MatchedSpots {
-    bool after_matching = false;  // this process ran the matching phase's end
     std::vector<AlbedoSpot> spots;
     std::vector<Image> crops;  // per spot, the after-matching albedo's window
 };
@@ -157,7 +157,6 @@ struct MatchedSpots {
 MatchedSpots matched_spots(const Trainer& trainer, const Image& matched_albedo) {
     MatchedSpots matched;
     if (!trainer.texel_atlas()) return matched;  // pixel evaluation: no texture-space report
-    matched.after_matching = true;
     const Image& input = trainer.albedo_target();
     const int window = std::max(8, input.width() / 16);
     matched.spots = find_albedo_spots(input, trainer.texel_charts(), window);
@@ -183,7 +182,6 @@ Json colour_check(const Trainer& trainer, const Image& final_albedo, const Match
                  {"added_colour_geometry_correlation", quality.added_colour_geometry_correlation >= 0.4},
                  {"max_above_local_max", above <= kRangeMeasureLimit}}},
         {"spots", Json::array()}};
-    if (!matched.after_matching) return colour;  // no matching phase: nothing to set beside the final
     const Image& input = trainer.albedo_target();
     for (std::size_t i = 0; i < matched.spots.size(); ++i) {
         const AlbedoSpot& spot = matched.spots[i];

@@ -103,9 +103,8 @@ struct Trainer::Batch {
     std::vector<float> curvature;
     std::size_t patch_hit_count = 0;  // hits of the patches come first
     // The map gradients: each allocated by the first scatter into it (the normal map's after the
-    // patches' guidance, the albedo's after the views'), freed by update().
+    // patches' guidance, the albedo's after the views'), freed by begin_map_gradients() and update().
     MipGradient albedo_gradient, normal_gradient;
-    std::array<bool, 2> map_gradients_pending{};  // albedo, normal: reset by begin_map_gradients(), not yet allocated
     std::vector<TrilinearTaps> scatter_taps;               // scatter_map_gradients: one block's taps
     std::vector<std::array<float, 4>> scatter_values;      // ... and the values they carry
     std::vector<FieldOutputGrads> texel_grads;

@@ -15,14 +15,17 @@ namespace tdf {
 using namespace trainer_detail;
 
 // ---- 5. Backward to the parameters ----------------------------------------------------------
-void Trainer::begin_map_gradients() { m_batch->map_gradients_pending = {true, true}; }
+// The map gradients hold no memory between iterations: an empty one is allocated (zero) by the
+// first scatter into it.
+void Trainer::begin_map_gradients() {
+    m_batch->albedo_gradient.release();
+    m_batch->normal_gradient.release();
+}
 
 void Trainer::reset_map_gradient(int map) {
     Batch& b = *m_batch;
-    if (!b.map_gradients_pending[std::size_t(map)]) return;
-    if (map == 0) b.albedo_gradient.reset(m_maps->albedo(), 4);
-    else b.normal_gradient.reset(m_maps->normal(), 4);
-    b.map_gradients_pending[std::size_t(map)] = false;
+    MipGradient& gradient = map == 0 ? b.albedo_gradient : b.normal_gradient;
+    if (gradient.empty()) gradient.reset(map == 0 ? m_maps->albedo() : m_maps->normal(), 4);
 }
 
 // The adjoint of the map lookups: each hit's gradient goes to the texels it blended. Albedo and
@@ -118,9 +121,7 @@ void Trainer::update(int i) {
         m_maps->evaluate_field(*m_field, m_config.refine_grid);
     }
     m_maps->update();
-    // Stepped on: the map gradients are not needed again before the next iteration's scatter.
-    m_batch->albedo_gradient.release();
-    m_batch->normal_gradient.release();
+    begin_map_gradients();  // stepped on: not needed again before the next iteration's scatter
 }
 
 }  // namespace tdf
