@@ -17,6 +17,16 @@ if command -v ccache >/dev/null; then
 fi
 ctest --test-dir build --output-on-failure -j"$JOBS" -LE slow
 
+# The vectorised lanes' AVX2 clones (include/tdf/core/simd_clones.h): on an AVX-512 machine the
+# suite above runs the AVX-512 ones. A Release build whose lanes have only AVX2 and baseline
+# clones (only their two files differ from build/, the rest comes from the cache) runs the render
+# unit tests, whose lanes tests compare every bit with the scalar formulas. The sanitized build
+# cannot stand in: the sanitizers' checks keep the lanes from vectorising.
+cmake -S . -B build-avx2 -G Ninja -DCMAKE_BUILD_TYPE=Release "-DTDF_SIMD_CLONES=avx2;default" \
+  -DTDF_BUILD_BENCH=OFF -DTDF_WERROR=ON "${LAUNCHER[@]}" >/dev/null
+cmake --build build-avx2 -j"$JOBS" --target tdf_render_tests
+ctest --test-dir build-avx2 --output-on-failure -j"$JOBS" -L unit_render
+
 if [ "${TDF_SKIP_SANITIZE:-0}" != 1 ]; then
   # The whole test suite again, built with AddressSanitizer + UndefinedBehaviorSanitizer (every
   # library, tdf itself, every gtest binary and the CLI tests that run tdf). Any report (memory

@@ -1,6 +1,7 @@
 #include <tdf/render/shade_lanes.h>
 
 #include <tdf/core/force_inline.h>
+#include <tdf/core/simd_clones.h>
 
 namespace tdf {
 
@@ -36,9 +37,7 @@ TDF_FORCE_INLINE void shade_all(ShadeLanes& l, const ShadeConstants& c) {
 // -ffp-contract=off (src/CMakeLists.txt): GCC otherwise fuses a*b+c into an FMA in the AVX-512
 // clone, which rounds once instead of twice. It is also built without errno for sqrt, so that
 // sqrt vectorises.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx512f", "avx2", "default")))
-#endif
+TDF_SIMD_CLONES
 void shade_lanes(ShadeLanes& lanes, const ShadeConstants& c) {
     if (c.training)
         c.point_light ? shade_all<true, true>(lanes, c) : shade_all<true, false>(lanes, c);

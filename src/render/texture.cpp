@@ -2,6 +2,7 @@
 
 #include <tdf/core/error.h>
 #include <tdf/core/force_inline.h>
+#include <tdf/core/simd_clones.h>
 #include <tdf/core/parallel.h>
 
 #include <algorithm>
@@ -177,9 +178,7 @@ void MipTexture::sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, flo
 // the LODs' arithmetic vectorises, and the footprints use the instruction sets' rounding. Every
 // clone gives sample_trilinear_pair_at's bits: the same operations in the same order, no FMA
 // contraction in this file (src/CMakeLists.txt), and the same glibc log2f.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx512f", "avx2", "default")))
-#endif
+TDF_SIMD_CLONES
 void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered, const Vec2f* uv,
                                         const Vec2f* duv_dx, const Vec2f* duv_dy, float* lod, float* out,
                                         float* other_out, int max_level) const {
@@ -202,9 +201,7 @@ void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, 
 }
 
 // Compiled like sample_trilinear_pairs, for the same reasons; the bits of sample_trilinear_at.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx512f", "avx2", "default")))
-#endif
+TDF_SIMD_CLONES
 void MipTexture::sample_trilinear_many(std::size_t n, const float* covered, const Vec2f* uv, const Vec2f* duv_dx,
                                        const Vec2f* duv_dy, float uv_scale, float lod_offset, float* lod, float* out,
                                        int max_level) const {
