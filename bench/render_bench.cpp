@@ -71,12 +71,13 @@ void BM_EmbreeSingleRays(benchmark::State& state) {
     ThreadLimit limit(int(state.range(0)));
     std::vector<float> t(std::size_t(kSize) * kSize);
     for (auto _ : state) {
-        parallel_for_tiles(kSize, kSize, kTraceTile, [&](int x0, int y0, int x1, int y1) {
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x)
-                    t[std::size_t(y) * kSize + std::size_t(x)] =
-                        trace_ray(s.scene, s.camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f)).t;
-        });
+        parallel_for_tiles(
+            kSize, kSize, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
+                for (int y = y0; y < y1; ++y)
+                    for (int x = x0; x < x1; ++x)
+                        t[std::size_t(y) * kSize + std::size_t(x)] =
+                            trace_ray(s.scene, s.camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f)).t;
+            });
         benchmark::DoNotOptimize(t.data());
     }
     set_rays(state);
@@ -123,16 +124,17 @@ void BM_Part_TwoTrilinearLookups(benchmark::State& state) {
     const GBuffer g = trace_gbuffer(s.scene, s.mesh, s.camera);
     std::vector<float> out(g.pixel_count() * 6);
     for (auto _ : state) {
-        parallel_for_tiles(kSize, kSize, kTraceTile, [&](int x0, int y0, int x1, int y1) {
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    const std::size_t i = g.index(x, y);
-                    if (!(g.mask[i] > 0.f)) continue;
-                    const float lod = s.albedo.level_of_detail(g.duv_dx[i], g.duv_dy[i]);
-                    s.albedo.sample_trilinear_at(g.uv[i], lod, &out[6 * i]);
-                    s.tactile.sample_trilinear_at(g.uv[i], lod, &out[6 * i + 3]);
-                }
-        });
+        parallel_for_tiles(
+            kSize, kSize, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
+                for (int y = y0; y < y1; ++y)
+                    for (int x = x0; x < x1; ++x) {
+                        const std::size_t i = g.index(x, y);
+                        if (!(g.mask[i] > 0.f)) continue;
+                        const float lod = s.albedo.level_of_detail(g.duv_dx[i], g.duv_dy[i]);
+                        s.albedo.sample_trilinear_at(g.uv[i], lod, &out[6 * i]);
+                        s.tactile.sample_trilinear_at(g.uv[i], lod, &out[6 * i + 3]);
+                    }
+            });
         benchmark::DoNotOptimize(out.data());
     }
     set_rays(state);

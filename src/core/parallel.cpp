@@ -54,14 +54,22 @@ void parallel_tasks(const std::vector<std::function<void()>>& tasks) {
 
 void parallel_for_tiles(int width, int height, int tile,
                         const std::function<void(int, int, int, int)>& body) {
+    parallel_for_tiles(width, height, tile, tile, body);
+}
+
+void parallel_for_tiles(int width, int height, int tile_width, int tile_height,
+                        const std::function<void(int, int, int, int)>& body) {
     if (width <= 0 || height <= 0) return;
-    const int tiles_x = (width + tile - 1) / tile;
-    const int tiles_y = (height + tile - 1) / tile;
+    const int tiles_x = (width + tile_width - 1) / tile_width;
+    const int tiles_y = (height + tile_height - 1) / tile_height;
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y, 1),
                       [&](const tbb::blocked_range<int>& r) {
                           for (int t = r.begin(); t != r.end(); ++t) {
-                              const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
-                              body(x0, y0, std::min(x0 + tile, width), std::min(y0 + tile, height));
+                              const int x0 = (t % tiles_x) * tile_width, y0 = (t / tiles_x) * tile_height;
+                              body(x0,
+                                   y0,
+                                   std::min(x0 + tile_width, width),
+                                   std::min(y0 + tile_height, height));
                           }
                       });
 }

@@ -362,23 +362,24 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
     std::vector<float> aa_depth(antialias ? pixel_count : 0);
 
     // Stage 2 (shading): one path for both producers.
-    parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
-        // One small G-buffer per thread, reused across tiles and frames: stays in cache.
-        static thread_local GBuffer g;
-        static thread_local std::vector<float> scratch;
-        produce_tile(x0, y0, x1, y1, g);
-        const Targets tile = targets.tile(scratch, g.pixel_count());
-        shader.shade(g, tile);
-        targets.flush(tile, camera.width, x0, y0, g.width, g.height);
-        if (antialias)
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    const std::size_t i = g.index(x - x0, y - y0);
-                    const std::size_t px = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
-                    aa_triangle[px] = g.triangle[i];
-                    aa_depth[px] = raster ? raster_buffer.rast[px].z : g.depth[i];
-                }
-    });
+    parallel_for_tiles(
+        camera.width, camera.height, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
+            // One small G-buffer per thread, reused across tiles and frames: stays in cache.
+            static thread_local GBuffer g;
+            static thread_local std::vector<float> scratch;
+            produce_tile(x0, y0, x1, y1, g);
+            const Targets tile = targets.tile(scratch, g.pixel_count());
+            shader.shade(g, tile);
+            targets.flush(tile, camera.width, x0, y0, g.width, g.height);
+            if (antialias)
+                for (int y = y0; y < y1; ++y)
+                    for (int x = x0; x < x1; ++x) {
+                        const std::size_t i = g.index(x - x0, y - y0);
+                        const std::size_t px = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
+                        aa_triangle[px] = g.triangle[i];
+                        aa_depth[px] = raster ? raster_buffer.rast[px].z : g.depth[i];
+                    }
+        });
     if (!raster) m_scene.throw_if_error("rendering");
 
     // Stage 3 (antialiasing): shared by both producers.

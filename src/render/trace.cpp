@@ -240,9 +240,10 @@ void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Cam
                    GBufferFields fields) {
     check_inputs(scene, mesh, camera);
     out.resize(camera.width, camera.height, fields);
-    parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
-        trace_region(scene, mesh, camera, x0, y0, x1, y1, out, 0, 0);
-    });
+    parallel_for_tiles(
+        camera.width, camera.height, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
+            trace_region(scene, mesh, camera, x0, y0, x1, y1, out, 0, 0);
+        });
     scene.throw_if_error("tracing");
 }
 
@@ -254,18 +255,21 @@ GBuffer trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const 
 
 std::size_t trace_closest_hits(const EmbreeScene& scene, const Camera& camera, std::vector<float>& t) {
     t.assign(std::size_t(camera.width) * std::size_t(camera.height), 0.f);
-    std::vector<std::size_t> tile_hits(chunk_count(std::size_t(camera.width), kTraceTile) *
-                                       chunk_count(std::size_t(camera.height), kTraceTile));
-    const int tiles_x = int(chunk_count(std::size_t(camera.width), kTraceTile));
-    parallel_for_tiles(camera.width, camera.height, kTraceTile, [&](int x0, int y0, int x1, int y1) {
-        std::size_t hits = 0;
-        trace_tile_dispatch(scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
-            const bool hit = packet.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
-            t[std::size_t(y) * std::size_t(camera.width) + std::size_t(x)] = hit ? packet.ray.tfar[lane] : 0.f;
-            hits += hit;
+    std::vector<std::size_t> tile_hits(chunk_count(std::size_t(camera.width), kTraceTileWidth) *
+                                       chunk_count(std::size_t(camera.height), kTraceTileHeight));
+    const int tiles_x = int(chunk_count(std::size_t(camera.width), kTraceTileWidth));
+    parallel_for_tiles(
+        camera.width, camera.height, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
+            std::size_t hits = 0;
+            trace_tile_dispatch(
+                scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
+                    const bool hit = packet.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
+                    t[std::size_t(y) * std::size_t(camera.width) + std::size_t(x)] =
+                        hit ? packet.ray.tfar[lane] : 0.f;
+                    hits += hit;
+                });
+            tile_hits[std::size_t((y0 / kTraceTileHeight) * tiles_x + x0 / kTraceTileWidth)] = hits;
         });
-        tile_hits[std::size_t((y0 / kTraceTile) * tiles_x + x0 / kTraceTile)] = hits;
-    });
     std::size_t total = 0;
     for (std::size_t h : tile_hits) total += h;
     return total;

@@ -35,6 +35,9 @@ void parallel_for(std::size_t count, std::size_t grain,
 /// Calls `body(x0, y0, x1, y1)` for each `tile` x `tile` tile of a width x height image.
 void parallel_for_tiles(int width, int height, int tile,
                         const std::function<void(int x0, int y0, int x1, int y1)>& body);
+/// The same with `tile_width` x `tile_height` tiles.
+void parallel_for_tiles(int width, int height, int tile_width, int tile_height,
+                        const std::function<void(int x0, int y0, int x1, int y1)>& body);
 
 /// Runs the independent `tasks` side by side (each may use parallel loops of its own) and returns
 /// when all have finished; the first exception thrown by a task is rethrown.

@@ -11,7 +11,7 @@ namespace tdf {
 
 // One tile's lanes: inputs from the G-buffer and the texture lookups, outputs for the passes.
 struct ShadeLanes {
-    static constexpr int kMax = kTraceTile * kTraceTile;
+    static constexpr int kMax = kTraceTilePixels;
     int count = 0;
     // Inputs: interpolated normal N and tangent T, handedness w, world position, the sampled
     // tangent-space tactile normal p (not normalised).
