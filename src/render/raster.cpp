@@ -1,6 +1,7 @@
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/render/raster.h>
+#include <tdf/render/trace.h>
 
 #include <algorithm>
 #include <cmath>
@@ -311,9 +312,12 @@ void raster_gbuffer(const TriangleMesh& mesh, const Camera& camera, GBuffer& out
     rasterize(clip_positions(mesh, camera), mesh.triangles, camera.width, camera.height, raster);
     TDF_CHECK_EQ(mesh.normals.size(), mesh.positions.size());
     out.resize(camera.width, camera.height);
-    parallel_for_tiles(camera.width, camera.height, kRasterTile, [&](int x0, int y0, int x1, int y1) {
-        interpolate_region(raster, mesh, camera, x0, y0, x1, y1, out, 0, 0);
-    });
+    // The tracer's tiles (trace.h): a full-frame G-buffer is bound by its writes, which 64x4 tiles keep
+    // on few pages.
+    parallel_for_tiles(camera.width, camera.height, kTraceTileWidth, kTraceTileHeight,
+                       [&](int x0, int y0, int x1, int y1) {
+                           interpolate_region(raster, mesh, camera, x0, y0, x1, y1, out, 0, 0);
+                       });
 }
 
 }  // namespace tdf

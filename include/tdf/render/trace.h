@@ -14,7 +14,7 @@ namespace tdf {
 /// The tiles traced (and shaded) in parallel: kTraceTileWidth x kTraceTileHeight pixels, one
 /// 16-wide packet tall. Wide and short, so that a tile touches few rows: a tile row is four cache
 /// lines of each float array of a full-frame G-buffer, and a tile spans 2 pages of it where a
-/// 16x16 tile spanned 8 (the main job's tracing: 0.060 -> 0.041 s per refinement iteration,
+/// 16x16 tile spanned 8 (the main job's tracing: 0.060 -> 0.040 s per refinement iteration,
 /// docs/measurements.md).
 constexpr int kTraceTileWidth = 64;
 constexpr int kTraceTileHeight = 4;
