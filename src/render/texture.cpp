@@ -2,8 +2,8 @@
 
 #include <tdf/core/error.h>
 #include <tdf/core/force_inline.h>
-#include <tdf/core/simd_clones.h>
 #include <tdf/core/parallel.h>
+#include <tdf/core/simd_clones.h>
 
 #include <algorithm>
 #include <cmath>
