@@ -556,10 +556,10 @@ void convolve_separable_in_place(ImageView image, const Kernel& kernel, Addressi
         for (std::size_t strip = s0; strip < s1; ++strip) {
             const std::size_t first = strip * kStripFloats, count = std::min(kStripFloats, row - first);
             columns.resize(count * std::size_t(h));
-            for (int y = 0; y < h; ++y) std::copy_n(image.row(y) + first, count, columns.data() + std::size_t(y) * count);
-            vertical_pass(
-                columns.data(), count, h, kernel, mode, [&](int y, std::vector<float>&) { return image.row(y) + first; },
-                [](int, const float*) {});
+            for (int y = 0; y < h; ++y)
+                std::copy_n(image.row(y) + first, count, columns.data() + std::size_t(y) * count);
+            const auto output_row = [&](int y, std::vector<float>&) { return image.row(y) + first; };
+            vertical_pass(columns.data(), count, h, kernel, mode, output_row, [](int, const float*) {});
         }
     });
 }

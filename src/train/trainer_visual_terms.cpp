@@ -141,7 +141,9 @@ void Trainer::render_visual_views(bool albedo_terms, bool visual_guidance, Guida
                 }
             });
             // At the output size (spec 3.8): the loss's and the request's images.
-            const auto output = [&](Image& internal) { return resized ? resize_bilinear(internal, S, S) : std::move(internal); };
+            const auto output = [&](Image& internal) {
+                return resized ? resize_bilinear(internal, S, S) : std::move(internal);
+            };
             guidance_images.lambertians.push_back(output(rendered));
             guidance_images.references.push_back(output(reference));
             controls.push_back(to_bae_control(output(normals)));
