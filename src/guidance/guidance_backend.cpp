@@ -1,6 +1,7 @@
 #include <tdf/guidance/guidance_backend.h>
 
 #include <tdf/core/error.h>
+#include <tdf/core/parallel.h>
 #include <tdf/core/vec.h>
 #include <tdf/guidance/exemplar_patch_match.h>
 #include <tdf/guidance/external_backend.h>
@@ -101,13 +102,15 @@ namespace {
 template <typename Convert>
 Image map_vectors(const Image& image, Convert convert) {
     TDF_CHECK_EQ(image.channels(), 3);
-    Image out(image.width(), image.height(), 3);
+    Image out(image.width(), image.height(), 3, Image::Uninitialized{});
     const float* src = image.data();
     float* dst = out.data();
-    for (std::size_t p = 0; p < image.pixel_count(); ++p, src += 3, dst += 3) {
-        const Vec3f v = convert(Vec3f(src[0], src[1], src[2]));
-        dst[0] = v.x, dst[1] = v.y, dst[2] = v.z;
-    }
+    parallel_for(image.pixel_count(), 1 << 14, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t p = begin; p < end; ++p) {
+            const Vec3f v = convert(Vec3f(src[3 * p], src[3 * p + 1], src[3 * p + 2]));
+            dst[3 * p] = v.x, dst[3 * p + 1] = v.y, dst[3 * p + 2] = v.z;
+        }
+    });
     return out;
 }
 }  // namespace

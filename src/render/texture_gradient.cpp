@@ -57,8 +57,8 @@ void MipGradient::add_band(const TrilinearTaps& taps, const float* grad, const B
 void MipGradient::accumulate(const MipGradient& other) {
     TDF_CHECK_EQ(other.m_levels.size(), m_levels.size());
     for (std::size_t k = 0; k < m_levels.size(); ++k) {
-        std::vector<float>& dst = m_levels[k].values();
-        const std::vector<float>& src = other.m_levels[k].values();
+        ImageValues& dst = m_levels[k].values();
+        const ImageValues& src = other.m_levels[k].values();
         TDF_CHECK_EQ(dst.size(), src.size());
         parallel_for(dst.size(), 1 << 16, [&](std::size_t begin, std::size_t end) {
             for (std::size_t i = begin; i < end; ++i) dst[i] += src[i];

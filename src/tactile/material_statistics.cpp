@@ -100,7 +100,7 @@ DetailSlopes detail_slopes(const Image& normals, float sigma_px) {
 Image texture_region(const Image& tilt_degrees) {
     TDF_CHECK_EQ(tilt_degrees.channels(), 1);
     const Image local = box_mean_replicated(tilt_degrees, 7);
-    const double threshold = 0.5 * percentile(local.values(), 90.0);
+    const double threshold = 0.5 * percentile({local.values().begin(), local.values().end()}, 90.0);
     Image mask(tilt_degrees.width(), tilt_degrees.height(), 1);
     for (std::size_t p = 0; p < mask.pixel_count(); ++p)
         mask.data()[p] = double(local.data()[p]) >= threshold ? 1.0f : 0.0f;

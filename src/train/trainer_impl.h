@@ -77,13 +77,30 @@ struct Trainer::Batch {
     std::vector<FieldOutputs> outputs;
     std::vector<FieldOutputGrads> grads;
     FieldCache field_cache;  // the forward's encodings, reused by the backward (no second gather)
-    // Patch view-space normals, P x R x R, zero vectors off the surface; freed after the patch
-    // half (the view half's guidance reuses the memory).
-    std::vector<Vec3f> patch_pred, patch_target, patch_grad;
-    // Visual images at the output size, B x S x S x 3 (interleaved, image after image).
-    // The albedo images only while an albedo term weighs (matching); the lambertian ones from the
-    // visual guidance's answer to the end of the view half.
-    std::vector<float> albedo_pred, albedo_target, albedo_grad, lambertian, lambertian_grad;
+    // Three arrays of one 3-vector per pixel of the half-iteration's images (P x R x R patch
+    // pixels, or B x S x S view pixels at the output size, image after image), which the two
+    // halves take in turn: allocated once, written in full by each use. The patch half keeps its
+    // view-space normals there (zero vectors off the surface), the view half its albedo renders
+    // (while an albedo term weighs: matching, the first refinement iteration), then its lambertian
+    // renders, as floats (interleaved RGB).
+    std::array<std::vector<Vec3f>, 3> pixel_arrays;
+    static float* floats(std::vector<Vec3f>& a) {
+        static_assert(sizeof(Vec3f) == 3 * sizeof(float), "Vec3f must be three packed floats");
+        return reinterpret_cast<float*>(a.data());
+    }
+    void size_pixel_arrays(std::size_t pixels) {
+        for (std::vector<Vec3f>& a : pixel_arrays) a.resize(pixels);
+    }
+    std::size_t pixel_array_size() const { return pixel_arrays[0].size(); }
+    Vec3f* patch_pred() { return pixel_arrays[0].data(); }
+    Vec3f* patch_target() { return pixel_arrays[1].data(); }  // then the tactile guidance's answer
+    Vec3f* patch_grad() { return pixel_arrays[2].data(); }
+    float* albedo_pred() { return floats(pixel_arrays[0]); }
+    float* albedo_target() { return floats(pixel_arrays[1]); }
+    float* albedo_grad() { return floats(pixel_arrays[2]); }
+    float* lambertian() { return floats(pixel_arrays[0]); }
+    float* refined_lambertian() { return floats(pixel_arrays[1]); }  // the visual guidance's answer
+    float* lambertian_grad() { return floats(pixel_arrays[2]); }
     std::vector<float> shade;  // per point: the lambertian shade of visual hits
     Image internal;            // one view at its internal (SSAA) size
     // Which view and pixel each hit came from (texture evaluation looks the maps up there).

@@ -6,7 +6,6 @@
 // evaluation, Batch::curvature of the patch hits; StageTimes::guidance; guidance frames.
 #include "trainer_impl.h"
 
-#include <tdf/core/release.h>
 #include <tdf/guidance/guidance_frames.h>
 #include <tdf/guidance/schedule.h>
 #include <tdf/loss/tactile_loss.h>
@@ -24,16 +23,20 @@ void add_patch_to_request(GuidanceRequest& request, const GBuffer& g, const Came
                           const float* weight) {
     const int w = g.width, h = g.height;
     const ViewRotation rot = view_rotation(camera);
-    Image normals(w, h, 3), mask(w, h, 1), surface_normals(w, h, 3), surface_tangents(w, h, 4);
+    // Every value is written below (zero off the surface).
+    const Image::Uninitialized unfilled;
+    Image normals(w, h, 3, unfilled), mask(w, h, 1, unfilled), surface_normals(w, h, 3, unfilled),
+        surface_tangents(w, h, 4, unfilled);
     parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
         for (std::size_t p = begin; p < end; ++p) {
             std::copy(&pred[p].x, &pred[p].x + 3, normals.data() + 3 * p);
             mask.data()[p] = weight ? g.mask[p] * weight[p] : g.mask[p];
-            if (g.mask[p] <= 0.0f) continue;
-            const Vec3f normal = view_space_normal(rot, g.normal[p]), tangent = view_space_normal(rot, g.tangent[p]);
+            const bool hit = g.mask[p] > 0.0f;
+            const Vec3f normal = hit ? view_space_normal(rot, g.normal[p]) : Vec3f{};
+            const Vec3f tangent = hit ? view_space_normal(rot, g.tangent[p]) : Vec3f{};
             std::copy(&normal.x, &normal.x + 3, surface_normals.data() + 3 * p);
             std::copy(&tangent.x, &tangent.x + 3, surface_tangents.data() + 4 * p);
-            surface_tangents.data()[4 * p + 3] = g.handedness[p];
+            surface_tangents.data()[4 * p + 3] = hit ? g.handedness[p] : 0.0f;
         }
     });
     request.images.push_back(std::move(normals));
@@ -50,15 +53,14 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
     Batch& b = *m_batch;
     const int P = cfg.patch_batch_size, R = cfg.patch_resolution;
     const std::size_t patch_pixels = std::size_t(R) * std::size_t(R);
-    b.patch_pred.resize(std::size_t(P) * patch_pixels);
-    b.patch_target.resize(b.patch_pred.size());
-    b.patch_grad.assign(b.patch_pred.size(), Vec3f{});
+    b.size_pixel_arrays(std::size_t(P) * patch_pixels);
+    parallel_fill(b.patch_grad(), b.pixel_array_size(), Vec3f{});
     for (int k = 0; k < P; ++k) {
         const GBuffer& g = b.gbuffers[std::size_t(k)];
         const ViewRotation rot = view_rotation(b.cameras[std::size_t(k)]);
         const std::vector<int>& point_of = b.point_of[std::size_t(k)];
-        Vec3f* pred = b.patch_pred.data() + std::size_t(k) * patch_pixels;
-        Vec3f* target = b.patch_target.data() + std::size_t(k) * patch_pixels;
+        Vec3f* pred = b.patch_pred() + std::size_t(k) * patch_pixels;
+        Vec3f* target = b.patch_target() + std::size_t(k) * patch_pixels;
         parallel_for(patch_pixels, kPixelGrain, [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin; p < end; ++p) {
                 const int q = point_of[p];
@@ -78,8 +80,9 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
         gated_tactile_terms(phase, record);
     } else if (phase.tactile_weight > 0 && P > 0) {
         record.terms["tactile_matching"] =
-            phase.tactile_weight * tactile_matching_loss(b.patch_pred.data(), b.patch_target.data(),
-                                                         b.patch_pred.size(), b.patch_grad.data(), phase.tactile_weight);
+            phase.tactile_weight * tactile_matching_loss(b.patch_pred(), b.patch_target(),
+                                                         b.pixel_array_size(), b.patch_grad(),
+                                                         phase.tactile_weight);
     }
     if (phase.tactile_guidance && P > 0 && !m_part_gate) {
         const auto g0 = Clock::now();
@@ -92,19 +95,22 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
         request.pixels_per_texel = m_patch_pixels_per_texel;
         for (int k = 0; k < P; ++k)
             add_patch_to_request(request, b.gbuffers[std::size_t(k)], b.cameras[std::size_t(k)],
-                                 b.patch_pred.data() + std::size_t(k) * patch_pixels, nullptr);
+                                 b.patch_pred() + std::size_t(k) * patch_pixels, nullptr);
         const GuidanceResult result = m_tactile_guidance->refine(request);
         validate_result(request, result, m_tactile_guidance->name());
         if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, phase.i, request, result);
-        std::vector<Vec3f> refined(b.patch_pred.size());
+        // Into the target's array: the matching term has read it.
+        Vec3f* refined = b.patch_target();
         for (int k = 0; k < P; ++k)
-            std::copy_n(result.refined[std::size_t(k)].data(), 3 * patch_pixels, &refined[std::size_t(k) * patch_pixels].x);
+            parallel_copy(result.refined[std::size_t(k)].data(), 3 * patch_pixels,
+                          &refined[std::size_t(k) * patch_pixels].x);
         const TactileGuidanceMetric metric = cfg.tactile_guidance_loss == TactileGuidanceLoss::Cosine
                                                  ? TactileGuidanceMetric::Cosine
                                                  : TactileGuidanceMetric::Mse;
         const float w = cfg.weights.tactile_guidance;
         record.terms["tactile_guidance"] =
-            w * tactile_guidance_loss(metric, b.patch_pred.data(), refined.data(), refined.size(), b.patch_grad.data(), w);
+            w * tactile_guidance_loss(metric, b.patch_pred(), refined, b.pixel_array_size(), b.patch_grad(),
+                                      w);
         m_times.guidance += seconds_since(g0);
     }
     if (texture_space() && !m_part_gate) {
@@ -127,7 +133,7 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
         const GBuffer& g = b.gbuffers[std::size_t(k)];
         const ViewRotation rot = view_rotation(b.cameras[std::size_t(k)]);
         const std::vector<int>& point_of = b.point_of[std::size_t(k)];
-        const Vec3f* grad = b.patch_grad.data() + std::size_t(k) * patch_pixels;
+        const Vec3f* grad = b.patch_grad() + std::size_t(k) * patch_pixels;
         parallel_for(patch_pixels, kPixelGrain, [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin; p < end; ++p) {
                 const int q = point_of[p];
@@ -139,7 +145,6 @@ void Trainer::tactile_terms(const Phase& phase, LossRecord& record) {
             }
         });
     }
-    release(b.patch_pred, b.patch_target, b.patch_grad);
 }
 
 // Multi-part (docs/multi-part-textures.md): each patch pixel's part from the gate's labels at
@@ -150,7 +155,7 @@ void Trainer::gated_tactile_terms(const Phase& phase, LossRecord& record) {
     PartGate& gate = *m_part_gate;
     const int P = cfg.patch_batch_size, R = cfg.patch_resolution;
     const std::size_t patch_pixels = std::size_t(R) * std::size_t(R);
-    std::vector<std::int16_t> pixel_part(b.patch_pred.size(), -1), guidance_part(b.patch_pred.size(), -1);
+    std::vector<std::int16_t> pixel_part(b.pixel_array_size(), -1), guidance_part(b.pixel_array_size(), -1);
     for (int k = 0; k < P; ++k) {
         const std::vector<int>& point_of = b.point_of[std::size_t(k)];
         parallel_for(patch_pixels, kPixelGrain, [&](std::size_t begin, std::size_t end) {
@@ -168,14 +173,14 @@ void Trainer::gated_tactile_terms(const Phase& phase, LossRecord& record) {
     GatedPatches patches;
     patches.patches = P;
     patches.resolution = R;
-    patches.pred = b.patch_pred.data();
-    patches.target = b.patch_target.data();
+    patches.pred = b.patch_pred();
+    patches.target = b.patch_target();
     patches.part = pixel_part.data();
     patches.guidance_part = guidance_part.data();
-    patches.grad = b.patch_grad.data();
+    patches.grad = b.patch_grad();
     patches.add_patch = [&](GuidanceRequest& request, int k, const float* mask) {
         add_patch_to_request(request, b.gbuffers[std::size_t(k)], b.cameras[std::size_t(k)],
-                             b.patch_pred.data() + std::size_t(k) * patch_pixels, mask);
+                             b.patch_pred() + std::size_t(k) * patch_pixels, mask);
     };
     GatedPhase gated;
     gated.iteration = phase.i;

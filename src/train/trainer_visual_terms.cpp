@@ -25,15 +25,12 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
     const int B = cfg.batch_size, S = cfg.resolution;
     const bool visual_guidance = phase.visual_guidance;
     // The refinement weighs no albedo term by default (albedo_refine 0): its views then render
-    // only the lambertians, and the matching phase's albedo images are let go.
+    // only the lambertians.
     const bool albedo_terms = phase.albedo_weight > 0;
     const std::size_t batch_values = std::size_t(B) * std::size_t(S) * std::size_t(S) * 3;
-    if (albedo_terms) {
-        b.albedo_pred.resize(batch_values);
-        b.albedo_target.resize(batch_values);
-        b.albedo_grad.assign(batch_values, 0.0f);
-    } else {
-        release(b.albedo_pred, b.albedo_target, b.albedo_grad);
+    if (albedo_terms) {  // the renders write every value of the prediction and the target
+        b.size_pixel_arrays(batch_values / 3);
+        parallel_fill(b.albedo_grad(), batch_values, 0.0f);
     }
     if (visual_guidance) b.shade.assign(b.hit_pixel.size(), 0.0f);
     GuidanceImages guidance_images;
@@ -42,26 +39,21 @@ void Trainer::visual_terms(const Phase& phase, LossRecord& record) {
     if (albedo_terms && B > 0) {
         const double value =
             phase.per_pixel_albedo
-                ? mse_loss(b.albedo_pred.data(), b.albedo_target.data(), b.albedo_pred.size(), b.albedo_grad.data(),
+                ? mse_loss(b.albedo_pred(), b.albedo_target(), batch_values, b.albedo_grad(),
                            phase.albedo_weight)
-                : mean_colour_mse_loss(b.albedo_pred.data(), b.albedo_target.data(), shape, b.albedo_grad.data(),
+                : mean_colour_mse_loss(b.albedo_pred(), b.albedo_target(), shape, b.albedo_grad(),
                                        phase.albedo_weight);
         record.terms[phase.per_pixel_albedo ? "albedo_matching" : "albedo_mean_colour"] = phase.albedo_weight * value;
-        // Into the hits now, so the albedo images are gone before the guidance runs (the first
+        // Into the hits now, so the visual guidance can take the pixel arrays (the first
         // refinement iteration has both terms). Each hit's sum starts at +0 and takes the albedo
         // term, then the lambertian's: the bits of adding their sum at once.
-        add_view_gradient(b.albedo_grad, false);
-        if (visual_guidance) release(b.albedo_pred, b.albedo_target, b.albedo_grad);
+        add_view_gradient(b.albedo_grad(), false);
     }
     if (visual_guidance && B > 0) {
         visual_guidance_terms(phase, std::move(guidance_images), record);
-        add_view_gradient(b.lambertian_grad, true);
+        add_view_gradient(b.lambertian_grad(), true);
     }
     if (texture_space()) set_view_curvature(phase);
-    // Read by nothing after the backward: freed, so the next iteration's patch half (its
-    // guidance request) reuses the memory. The albedo images stay through the matching phase,
-    // which has no guidance (sized once, no allocation an iteration).
-    release(b.lambertian, b.lambertian_grad);
 }
 
 // The views at the output size: the learned albedo, the input's, and with visual guidance the
@@ -105,8 +97,8 @@ void Trainer::render_visual_views(bool albedo_terms, bool visual_guidance, Guida
         };
         if (albedo_terms) {
             render_internal([&](std::size_t, std::size_t q) { return b.outputs[q].albedo; },
-                            b.albedo_pred.data() + std::size_t(k) * view_values);
-            render_internal(input_albedo, b.albedo_target.data() + std::size_t(k) * view_values);
+                            b.albedo_pred() + std::size_t(k) * view_values);
+            render_internal(input_albedo, b.albedo_target() + std::size_t(k) * view_values);
         }
         if (visual_guidance) {
             const Vec3f light = b.lights[std::size_t(k)];
@@ -115,14 +107,20 @@ void Trainer::render_visual_views(bool albedo_terms, bool visual_guidance, Guida
             // of the learned maps and of the input (white background), the learned relief's
             // view-space normals, the coverage, the mesh's own normals (zero background). The
             // shading normal is composed once and serves the shade and the control image.
-            Image rendered(g.width, g.height, 3), reference(g.width, g.height, 3);
-            Image normals(g.width, g.height, 3), mask(g.width, g.height, 1), surface(g.width, g.height, 3);
+            // Every value is written below.
+            const Image::Uninitialized unfilled;
+            Image rendered(g.width, g.height, 3, unfilled), reference(g.width, g.height, 3, unfilled);
+            Image normals(g.width, g.height, 3, unfilled), mask(g.width, g.height, 1, unfilled),
+                surface(g.width, g.height, 3, unfilled);
             parallel_for(g.pixel_count(), kPixelGrain, [&](std::size_t begin, std::size_t end) {
                 for (std::size_t p = begin; p < end; ++p) {
                     const int q = point_of[p];
                     if (q < 0) {
                         std::fill_n(rendered.data() + 3 * p, 3, 1.0f);
                         std::fill_n(reference.data() + 3 * p, 3, 1.0f);
+                        std::fill_n(normals.data() + 3 * p, 3, 0.0f);
+                        std::fill_n(surface.data() + 3 * p, 3, 0.0f);
+                        mask.data()[p] = 0.0f;
                         continue;
                     }
                     const std::size_t h = std::size_t(q);
@@ -179,27 +177,31 @@ void Trainer::visual_guidance_terms(const Phase& phase, GuidanceImages guidance_
     if (!m_frames_folder.empty()) save_guidance_frames(m_frames_folder, phase.i, request, result);
     // The loss reads the renders and the refined images each as one array over the views.
     const std::size_t batch_values = std::size_t(B) * view_values;
-    b.lambertian.resize(batch_values);
-    for (int k = 0; k < B; ++k) copy_into(request.images[std::size_t(k)], b.lambertian.data() + std::size_t(k) * view_values);
+    b.size_pixel_arrays(batch_values / 3);
+    float* const lambertian = b.lambertian();
+    float* const refined = b.refined_lambertian();
+    float* const grad = b.lambertian_grad();
+    for (int k = 0; k < B; ++k)
+        parallel_copy(request.images[std::size_t(k)].data(), view_values,
+                      lambertian + std::size_t(k) * view_values);
     release(request.images, request.reference_images, request.control, request.surface_normals);
-    b.lambertian_grad.assign(batch_values, 0.0f);
-    std::vector<float> refined(batch_values);
+    parallel_fill(grad, batch_values, 0.0f);
     for (int k = 0; k < B; ++k) {
         // Background forced to white (spec 5.4).
-        Image& r = result.refined[std::size_t(k)];
-        const Image& m = request.masks[std::size_t(k)];
-        for (std::size_t p = 0; p < r.pixel_count(); ++p)
-            if (m.data()[p] == 0.0f) std::fill_n(r.data() + 3 * p, 3, 1.0f);
-        copy_into(r, refined.data() + std::size_t(k) * view_values);
+        const float* r = result.refined[std::size_t(k)].data();
+        const float* m = request.masks[std::size_t(k)].data();
+        float* out = refined + std::size_t(k) * view_values;
+        parallel_for(view_values / 3, kPixelGrain, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t p = begin; p < end; ++p)
+                for (int c = 0; c < 3; ++c) out[3 * p + c] = m[p] == 0.0f ? 1.0f : r[3 * p + c];
+        });
     }
     const float w = cfg.weights.visual_guidance, ws = cfg.weights.visual_guidance_structural;
     if (cfg.visual_guidance_loss == "mse") {
-        record.terms["visual_guidance_mse"] =
-            w * mse_loss(b.lambertian.data(), refined.data(), refined.size(), b.lambertian_grad.data(), w);
+        record.terms["visual_guidance_mse"] = w * mse_loss(lambertian, refined, batch_values, grad, w);
     } else {
-        const double l1 = l1_loss(b.lambertian.data(), refined.data(), refined.size(), b.lambertian_grad.data(), w);
-        const double structural =
-            ws > 0 ? ssim_loss(b.lambertian.data(), refined.data(), shape, b.lambertian_grad.data(), w * ws) : 0.0;
+        const double l1 = l1_loss(lambertian, refined, batch_values, grad, w);
+        const double structural = ws > 0 ? ssim_loss(lambertian, refined, shape, grad, w * ws) : 0.0;
         record.terms["visual_guidance_l1"] = w * l1;
         record.terms["visual_guidance_structural"] = w * ws * structural;
     }
@@ -209,7 +211,7 @@ void Trainer::visual_guidance_terms(const Phase& phase, GuidanceImages guidance_
 // One image gradient of the views (B x S x S x 3 at the output size: the albedo term's, or with
 // `lambertian` the lambertian's, times each hit's shade) back through the resize (its adjoint) to
 // the internal pixels, then added to the hits' albedo gradients.
-void Trainer::add_view_gradient(const std::vector<float>& grad, bool lambertian) {
+void Trainer::add_view_gradient(const float* grad, bool lambertian) {
     const RunConfig& cfg = m_config;
     Batch& b = *m_batch;
     const int P = cfg.patch_batch_size, B = cfg.batch_size, S = cfg.resolution;
@@ -219,7 +221,7 @@ void Trainer::add_view_gradient(const std::vector<float>& grad, bool lambertian)
         const GBuffer& g = b.gbuffers[gi];
         const std::vector<int>& point_of = b.point_of[gi];
         // Without SSAA the view's pixels are the internal ones: read in place.
-        const float* view = grad.data() + std::size_t(k) * view_values;
+        const float* view = grad + std::size_t(k) * view_values;
         Image internal;
         if (g.width != S || g.height != S) {
             Image output(S, S, 3);

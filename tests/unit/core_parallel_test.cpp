@@ -35,3 +35,18 @@ TEST(ParallelTasks, RethrowsATasksError) {
     EXPECT_THROW(parallel_tasks(tasks), Error);
     EXPECT_LE(ran.load(), 1);
 }
+
+// parallel_copy and parallel_fill cover every item across several chunks (the sizes are not
+// multiples of the chunk) and nothing past the end.
+TEST(ParallelCopy, CopiesAndFillsEveryItemAndNoMore) {
+    for (const std::size_t count : {std::size_t(0), std::size_t(7), std::size_t(300001)}) {
+        std::vector<float> from(count), to(count + 1, -1.0f);
+        for (std::size_t i = 0; i < count; ++i) from[i] = float(i) * 0.5f;
+        parallel_copy(from.data(), count, to.data());
+        for (std::size_t i = 0; i < count; ++i) ASSERT_EQ(to[i], from[i]) << count << " items, item " << i;
+        EXPECT_EQ(to[count], -1.0f) << "written past the end";
+        parallel_fill(to.data(), count, 3.0f);
+        for (std::size_t i = 0; i < count; ++i) ASSERT_EQ(to[i], 3.0f) << count << " items, item " << i;
+        EXPECT_EQ(to[count], -1.0f) << "filled past the end";
+    }
+}

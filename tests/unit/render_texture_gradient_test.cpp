@@ -131,8 +131,8 @@ TEST(TextureGradient, BandedScatterGivesTheSameBitsAsOnePass) {
         for (int band = count - 1; band >= 0; --band)  // any band order: the bands are disjoint
             for (std::size_t k = 0; k < lookups.size(); ++k) banded.add_band(taps[k], &g[4 * k], bands, band);
         for (int level = 0; level < tex.level_count(); ++level) {
-            const std::vector<float>& a = one_pass.level(level).values();
-            const std::vector<float>& b = banded.level(level).values();
+            const ImageValues& a = one_pass.level(level).values();
+            const ImageValues& b = banded.level(level).values();
             ASSERT_EQ(a.size(), b.size());
             std::size_t differing = 0;
             for (std::size_t i = 0; i < a.size(); ++i) differing += std::memcmp(&a[i], &b[i], sizeof(float)) != 0;

@@ -148,7 +148,7 @@ TEST(TextureOptimization, IterationsCountPerWindowSide) {
         o.iterations = std::move(iterations);
         return optimize_texture(exemplars, {}, initial, o).values();
     };
-    const std::vector<float> two_two = run({2, 2});
+    const ImageValues two_two = run({2, 2});
     EXPECT_EQ(run({2}), two_two) << "one value is every side's";
     EXPECT_NE(run({3, 2}), two_two) << "the coarse side's count has no effect";
     EXPECT_NE(run({2, 3}), two_two) << "the fine side's count has no effect";

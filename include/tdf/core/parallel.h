@@ -4,10 +4,11 @@
 /// Determinism rule: parallel work either writes disjoint outputs (per pixel, per texel) or
 /// reduces per-chunk partial results in chunk order. Chunks are fixed by the problem size,
 /// never by the thread count, so results are bit-identical on 1 and N threads.
+#include <algorithm>
 #include <cstddef>
 #include <functional>
-#include <vector>
 #include <memory>
+#include <vector>
 
 namespace tdf {
 
@@ -42,6 +43,22 @@ void parallel_for_tiles(int width, int height, int tile_width, int tile_height,
 /// Runs the independent `tasks` side by side (each may use parallel loops of its own) and returns
 /// when all have finished; the first exception thrown by a task is rethrown.
 void parallel_tasks(const std::vector<std::function<void()>>& tasks);
+
+/// Copies `count` items from `from` to `to` (non-overlapping) on every core, and sets `count`
+/// items to `value`: for the training loop's megabyte buffers, where a copy on one thread leaves
+/// the other cores waiting.
+template <typename T>
+void parallel_copy(const T* from, std::size_t count, T* to) {
+    parallel_for(count, std::size_t(1) << 16, [=](std::size_t begin, std::size_t end) {
+        std::copy(from + begin, from + end, to + begin);
+    });
+}
+template <typename T>
+void parallel_fill(T* to, std::size_t count, const T& value) {
+    parallel_for(count, std::size_t(1) << 16, [=, &value](std::size_t begin, std::size_t end) {
+        std::fill(to + begin, to + end, value);
+    });
+}
 
 /// Number of fixed-size chunks [i*chunk, min((i+1)*chunk, count)) covering [0, count).
 inline std::size_t chunk_count(std::size_t count, std::size_t chunk) {

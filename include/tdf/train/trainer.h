@@ -251,7 +251,7 @@ private:
     void visual_terms(const Phase& phase, LossRecord& record);
     void render_visual_views(bool albedo_terms, bool visual_guidance, GuidanceImages& guidance_images);
     void visual_guidance_terms(const Phase& phase, GuidanceImages guidance_images, LossRecord& record);
-    void add_view_gradient(const std::vector<float>& grad, bool lambertian);
+    void add_view_gradient(const float* grad, bool lambertian);
     void set_view_curvature(const Phase& phase);
     // trainer_refinement.cpp
     void begin_map_gradients();

@@ -1,0 +1,49 @@
+// Image's storage: filled in parallel when large (the same values on any thread count), and
+// its allocator's containers keep what they hold when they grow.
+#include <tdf/core/image.h>
+#include <tdf/core/parallel.h>
+
+#include <gtest/gtest.h>
+
+namespace tdf {
+namespace {
+
+TEST(Image, EveryValueTakesTheFillOnAnyThreadCount) {
+    // 301 x 257 x 3 values: several fill chunks, the last one partial; and a one-chunk image.
+    for (const int threads : {1, 2}) {
+        ThreadLimit limit(threads);
+        for (const auto& [w, h] : {std::pair{301, 257}, std::pair{5, 3}}) {
+            const Image image(w, h, 3, 0.25f);
+            ASSERT_EQ(image.values().size(), std::size_t(w) * std::size_t(h) * 3);
+            std::size_t wrong = 0;
+            for (float v : image.values()) wrong += v != 0.25f;
+            EXPECT_EQ(wrong, 0u) << w << "x" << h << ", " << threads << " threads";
+            const Image zero(w, h, 2);
+            for (float v : zero.values()) wrong += v != 0.0f;
+            EXPECT_EQ(wrong, 0u) << "default fill, " << w << "x" << h;
+        }
+    }
+}
+
+TEST(Image, AnUninitializedImageHasItsShapeAndTakesWrites) {
+    Image image(64, 32, 4, Image::Uninitialized{});
+    EXPECT_EQ(image.width(), 64);
+    EXPECT_EQ(image.height(), 32);
+    EXPECT_EQ(image.channels(), 4);
+    ASSERT_EQ(image.values().size(), 64u * 32u * 4u);
+    parallel_fill(image.data(), image.values().size(), 2.0f);
+    EXPECT_EQ(image.at(63, 31, 3), 2.0f);
+    EXPECT_TRUE(image.all_finite());
+}
+
+TEST(Image, ValuesKeepTheirContentsWhenTheStorageGrows) {
+    ImageValues values(3, 1.5f);  // a value given is written
+    values.resize(100000);        // reallocates: the first three move with their values
+    EXPECT_EQ(values[0], 1.5f);
+    EXPECT_EQ(values[2], 1.5f);
+    values.assign(10, -1.0f);
+    for (float v : values) EXPECT_EQ(v, -1.0f);
+}
+
+}  // namespace
+}  // namespace tdf
