@@ -19,23 +19,18 @@ namespace {
 template <typename MaskOf>
 double mse_impl(const float* pred, const float* target, std::size_t count, float* grad, float weight, MaskOf mask_of) {
     if (count == 0) return 0.0;
+    // The gradient needs no sum: both in one pass over the values.
+    const float scale = float(2.0 * double(weight) / double(count));
     const double sum = ordered_sum(count, [&](std::size_t b, std::size_t e) {
         double s = 0;
         for (std::size_t i = b; i < e; ++i) {
-            const double d = double(mask_of(i)) * (double(pred[i]) - double(target[i]));
+            const float m = mask_of(i);
+            const double d = double(m) * (double(pred[i]) - double(target[i]));
             s += d * d;
+            if (grad) grad[i] += scale * m * m * (pred[i] - target[i]);
         }
         return s;
     });
-    if (grad) {
-        const float scale = float(2.0 * double(weight) / double(count));
-        elementwise(count, [&](std::size_t b, std::size_t e) {
-            for (std::size_t i = b; i < e; ++i) {
-                const float m = mask_of(i);
-                grad[i] += scale * m * m * (pred[i] - target[i]);
-            }
-        });
-    }
     return sum / double(count);
 }
 
@@ -53,20 +48,17 @@ double masked_mse_loss(const float* pred, const float* target, const float* mask
 
 double l1_loss(const float* pred, const float* target, std::size_t count, float* grad, float weight) {
     if (count == 0) return 0.0;
+    const float scale = float(double(weight) / double(count));
     const double sum = ordered_sum(count, [&](std::size_t b, std::size_t e) {
         double s = 0;
-        for (std::size_t i = b; i < e; ++i) s += std::abs(double(pred[i]) - double(target[i]));
+        for (std::size_t i = b; i < e; ++i) {
+            s += std::abs(double(pred[i]) - double(target[i]));
+            if (!grad) continue;
+            const float d = pred[i] - target[i];
+            grad[i] += d > 0 ? scale : (d < 0 ? -scale : 0.0f);
+        }
         return s;
     });
-    if (grad) {
-        const float scale = float(double(weight) / double(count));
-        elementwise(count, [&](std::size_t b, std::size_t e) {
-            for (std::size_t i = b; i < e; ++i) {
-                const float d = pred[i] - target[i];
-                grad[i] += d > 0 ? scale : (d < 0 ? -scale : 0.0f);
-            }
-        });
-    }
     return sum / double(count);
 }
 
@@ -128,24 +120,16 @@ inline Vec3f cosine_gradient(Vec3f x, Vec3f y) {
 double masked_cosine_impl(const Vec3f* pred, const Vec3f* target, const float* mask, std::size_t count,
                           Vec3f* grad, float weight) {
     if (count == 0) return 0.0;
+    const float scale = -weight / float(count);
     const double sum = ordered_sum(count, [&](std::size_t b, std::size_t e) {
         double s = 0;
         for (std::size_t i = b; i < e; ++i) {
             const float m = mask ? mask[i] : 1.0f;
             s += double(cosine_similarity(pred[i] * m, target[i] * m, kCosineEps));
+            if (grad && m != 0.0f) grad[i] += cosine_gradient(pred[i] * m, target[i] * m) * (scale * m);
         }
         return s;
     });
-    if (grad) {
-        const float scale = -weight / float(count);
-        elementwise(count, [&](std::size_t b, std::size_t e) {
-            for (std::size_t i = b; i < e; ++i) {
-                const float m = mask ? mask[i] : 1.0f;
-                if (m == 0.0f) continue;
-                grad[i] += cosine_gradient(pred[i] * m, target[i] * m) * (scale * m);
-            }
-        });
-    }
     return 1.0 - sum / double(count);
 }
 
