@@ -327,6 +327,8 @@ void load_inputs(OptimizeRun& run) {
     const RunConfig& config = run.config;
     const SceneDescription& description = run.description;
     run.assets = load_scene_assets(description);
+    if (config.patch_resolution_auto)
+        run.config.patch_resolution = auto_patch_resolution(run.assets->mesh, config);
     {
         // The reference's cameras (radius 1.25-2.25, 0.15-unit patches, spec 2.3-2.4) assume a mesh
         // of about unit size centred at the origin; its base meshes are (training uses raw coordinates).
@@ -416,8 +418,14 @@ void attach_guidance(Trainer& trainer, const OptimizeRun& run) {
         log_info("guidance: {}{}; the refinement phase uses the matching terms only for what is disabled",
                  visual ? "" : "visual off ", tactile_on ? "" : "tactile off");
     trainer.set_guidance(std::move(visual), std::move(tactile));
-    log_info("tactile patches: {:.2f} pixels per tactile map texel ({} px over {:.4g} mesh units)", trainer.pixels_per_texel(),
-             config.patch_resolution, 2.0 * double(config.patch_half_extent));
+    log_info("tactile patches: {:.2f} pixels per tactile map texel ({} px over {:.4g} mesh units{})",
+             trainer.pixels_per_texel(), config.patch_resolution, 2.0 * double(config.patch_half_extent),
+             config.patch_resolution_auto
+                 ? fmt::format("; optimize.patch_resolution=auto: {:.1f} px per learned-map texel, the "
+                               "reference's 512 px {:.1f}",
+                               config.patch_resolution / patch_window_texels(run.assets->mesh, config),
+                               512.0 / patch_window_texels(run.assets->mesh, config))
+                 : "");
     if (config.save_guidance_frames) trainer.save_guidance_frames_to(run.options.output_dir + "/guidance_frames");
 }
 

@@ -2,6 +2,8 @@
 
 #include <tdf/core/error.h>
 #include <tdf/guidance/guidance_backend.h>
+#include <tdf/mesh/triangle_mesh.h>
+#include <tdf/render/material_sampling.h>
 
 #include <algorithm>
 #include <cmath>
@@ -116,7 +118,19 @@ RunConfig RunConfig::from_json(const Json& optimize, const Json& tactile_layout,
     c.batch_size = r.get("batch_size", c.batch_size);
     c.patch_batch_size = r.get("patch_batch_size", c.patch_batch_size);
     c.resolution = r.get("resolution", c.resolution);
-    c.patch_resolution = r.get("patch_resolution", c.patch_resolution);
+    if (c.evaluation != FieldEvaluation::Texture) c.patch_resolution_auto = false;  // the reference's 512
+    if (r.has("patch_resolution")) {
+        const Json& value = r.raw("patch_resolution");
+        if (value.is_string()) {
+            if (value.get<std::string>() != "auto")
+                throw_error("{}: optimize.patch_resolution must be a size in pixels or \"auto\", got '{}'",
+                            source, value.get<std::string>());
+            c.patch_resolution_auto = true;
+        } else {
+            c.patch_resolution = r.get("patch_resolution", c.patch_resolution);
+            c.patch_resolution_auto = false;
+        }
+    }
     c.patch_half_extent = r.get("patch_half_extent", c.patch_half_extent);
     c.patch_distance = r.get("patch_distance", c.patch_distance);
     c.max_ssaa = r.get("max_ssaa", c.max_ssaa);
@@ -229,6 +243,27 @@ void RunConfig::validate(const std::string& source) const {
                                  weights.visual_guidance_structural, weights.texture_albedo, weights.texture_tactile};
     for (float v : all_weights)
         if (!(v >= 0.0f)) throw_error("{}: loss weights must be >= 0 and finite", source);
+}
+
+double patch_window_texels(const TriangleMesh& mesh, const RunConfig& config) {
+    if (!mesh.has_uvs()) return 0.0;
+    double units_per_uv_unit = 0.0;
+    try {
+        units_per_uv_unit = mesh_units_per_uv_unit(mesh);
+    } catch (const Error&) {
+        return 0.0;  // no UV area
+    }
+    const double texels =
+        2.0 * double(config.patch_half_extent) * double(config.texture_size) / units_per_uv_unit;
+    return std::isfinite(texels) ? texels : 0.0;
+}
+
+int auto_patch_resolution(const TriangleMesh& mesh, const RunConfig& config) {
+    constexpr int kReference = 512, kSmallest = 64, kStep = 32;
+    const double texels = patch_window_texels(mesh, config);
+    const double pixels = std::ceil(double(kAutoPatchPixelsPerTexel) * texels / kStep) * kStep;
+    if (!(texels > 0.0) || pixels >= double(kReference)) return kReference;
+    return std::max(kSmallest, int(pixels));
 }
 
 Json RunConfig::to_json() const {

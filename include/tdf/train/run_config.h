@@ -84,7 +84,12 @@ struct RunConfig {
     int batch_size = 4;             ///< visual views per iteration (spec 2.3)
     int patch_batch_size = 4;       ///< tactile patches per iteration (spec 2.4)
     int resolution = 512;           ///< visual render size (spec 2.3)
-    int patch_resolution = 512;     ///< tactile patch render size (spec 2.4)
+    /// Tactile patch render size in pixels (spec 2.4: 512). "auto" (patch_resolution_auto, the
+    /// texture schedule's default) sizes it from the learned maps' texel density once the mesh is
+    /// known (auto_patch_resolution): the reference's 512 px sample a 1024^2 map's texels with 16
+    /// to 20 pixels a side on its meshes, four patches being about half of a refinement iteration.
+    int patch_resolution = 512;
+    bool patch_resolution_auto = true;
     float patch_half_extent = 0.075f;  ///< half side of the orthographic patch window, mesh units (spec 2.4)
     float patch_distance = 0.1f;    ///< patch camera height above the surface, mesh units (spec 2.4)
     /// Random SSAA factor in [1, max] (spec 2.3); 1 = off. 2 in the reference schedule; 1 in the
@@ -145,5 +150,16 @@ struct RunConfig {
     /// Checks ranges; throws tdf::Error naming the key.
     void validate(const std::string& source) const;
 };
+
+struct TriangleMesh;
+
+/// The patch size "auto" stands for: kAutoPatchPixelsPerTexel pixels a side for each texel of the
+/// learned maps (export.texture_size over the mesh's UV layout) across the patch window, rounded
+/// up to a multiple of 32 and kept within [64, 512] (512 is the reference's size). 512 when the
+/// mesh has no UV area.
+constexpr int kAutoPatchPixelsPerTexel = 4;
+int auto_patch_resolution(const TriangleMesh& mesh, const RunConfig& config);
+/// Texels of the learned maps across the patch window (0 when the mesh has no UV area).
+double patch_window_texels(const TriangleMesh& mesh, const RunConfig& config);
 
 }  // namespace tdf
