@@ -88,10 +88,16 @@ struct Trainer::Batch {
         static_assert(sizeof(Vec3f) == 3 * sizeof(float), "Vec3f must be three packed floats");
         return reinterpret_cast<float*>(a.data());
     }
+    // The pixels of the current half; the arrays never shrink, as a std::vector resized back up
+    // into its capacity value-initialises the new elements on one thread (the view half has
+    // five times the patch half's pixels at 224 px patches: 2 % of a refinement's samples).
+    std::size_t pixel_array_count = 0;
     void size_pixel_arrays(std::size_t pixels) {
-        for (std::vector<Vec3f>& a : pixel_arrays) a.resize(pixels);
+        pixel_array_count = pixels;
+        for (std::vector<Vec3f>& a : pixel_arrays)
+            if (a.size() < pixels) a.resize(pixels);
     }
-    std::size_t pixel_array_size() const { return pixel_arrays[0].size(); }
+    std::size_t pixel_array_size() const { return pixel_array_count; }
     Vec3f* patch_pred() { return pixel_arrays[0].data(); }
     Vec3f* patch_target() { return pixel_arrays[1].data(); }  // then the tactile guidance's answer
     Vec3f* patch_grad() { return pixel_arrays[2].data(); }
