@@ -418,13 +418,13 @@ void attach_guidance(Trainer& trainer, const OptimizeRun& run) {
         log_info("guidance: {}{}; the refinement phase uses the matching terms only for what is disabled",
                  visual ? "" : "visual off ", tactile_on ? "" : "tactile off");
     trainer.set_guidance(std::move(visual), std::move(tactile));
+    const double window_texels = patch_window_texels(run.assets->mesh, config);
     log_info("tactile patches: {:.2f} pixels per tactile map texel ({} px over {:.4g} mesh units{})",
              trainer.pixels_per_texel(), config.patch_resolution, 2.0 * double(config.patch_half_extent),
-             config.patch_resolution_auto
+             config.patch_resolution_auto && window_texels > 0.0
                  ? fmt::format("; optimize.patch_resolution=auto: {:.1f} px per learned-map texel, the "
                                "reference's 512 px {:.1f}",
-                               config.patch_resolution / patch_window_texels(run.assets->mesh, config),
-                               512.0 / patch_window_texels(run.assets->mesh, config))
+                               config.patch_resolution / window_texels, 512.0 / window_texels)
                  : "");
     if (config.save_guidance_frames) trainer.save_guidance_frames_to(run.options.output_dir + "/guidance_frames");
 }
