@@ -3,7 +3,6 @@
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 
-#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -21,15 +20,7 @@ Image::Image(int width, int height, int channels, float fill)
     : Image(width, height, channels, Uninitialized{}) {
     // Images of the training loop are megabytes, allocated every iteration: filled on one
     // thread, their zeroing was a tenth of a refinement iteration's wall time.
-    constexpr std::size_t kGrain = std::size_t(1) << 16;
-    float* v = m_data.data();
-    if (m_data.size() <= kGrain) {
-        std::fill(m_data.begin(), m_data.end(), fill);
-        return;
-    }
-    parallel_for(m_data.size(), kGrain, [&](std::size_t begin, std::size_t end) {
-        std::fill(v + begin, v + end, fill);
-    });
+    parallel_fill(m_data.data(), m_data.size(), fill);
 }
 
 Image Image::channel_range(int first, int count) const {

@@ -224,7 +224,7 @@ void Trainer::add_view_gradient(const float* grad, bool lambertian) {
         const float* view = grad + std::size_t(k) * view_values;
         Image internal;
         if (g.width != S || g.height != S) {
-            Image output(S, S, 3);
+            Image output(S, S, 3, Image::Uninitialized{});  // every value copied next
             std::copy_n(view, view_values, output.data());
             internal = resize_bilinear_adjoint(output, g.width, g.height);
             view = internal.data();

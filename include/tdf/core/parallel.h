@@ -46,16 +46,25 @@ void parallel_tasks(const std::vector<std::function<void()>>& tasks);
 
 /// Copies `count` items from `from` to `to` (non-overlapping) on every core, and sets `count`
 /// items to `value`: for the training loop's megabyte buffers, where a copy on one thread leaves
-/// the other cores waiting.
+/// the other cores waiting. Up to one chunk stays on the calling thread.
+constexpr std::size_t kCopyChunk = std::size_t(1) << 16;
 template <typename T>
 void parallel_copy(const T* from, std::size_t count, T* to) {
-    parallel_for(count, std::size_t(1) << 16, [=](std::size_t begin, std::size_t end) {
+    if (count <= kCopyChunk) {
+        std::copy(from, from + count, to);
+        return;
+    }
+    parallel_for(count, kCopyChunk, [=](std::size_t begin, std::size_t end) {
         std::copy(from + begin, from + end, to + begin);
     });
 }
 template <typename T>
 void parallel_fill(T* to, std::size_t count, const T& value) {
-    parallel_for(count, std::size_t(1) << 16, [=, &value](std::size_t begin, std::size_t end) {
+    if (count <= kCopyChunk) {
+        std::fill(to, to + count, value);
+        return;
+    }
+    parallel_for(count, kCopyChunk, [=, &value](std::size_t begin, std::size_t end) {
         std::fill(to + begin, to + end, value);
     });
 }

@@ -86,8 +86,9 @@ struct RunConfig {
     int resolution = 512;           ///< visual render size (spec 2.3)
     /// Tactile patch render size in pixels (spec 2.4: 512). "auto" (patch_resolution_auto, the
     /// texture schedule's default) sizes it from the learned maps' texel density once the mesh is
-    /// known (auto_patch_resolution): the reference's 512 px sample a 1024^2 map's texels with 16
-    /// to 20 pixels a side on its meshes, four patches being about half of a refinement iteration.
+    /// known (auto_patch_resolution): the reference's 512 px sample a 1024^2 map's texels with
+    /// 9.6 (pebble sphere) to 12.5 (mug) pixels a side, four patches being about 40 % of a
+    /// refinement iteration (docs/commands/optimize.md, "Patch resolution").
     int patch_resolution = 512;
     bool patch_resolution_auto = true;
     float patch_half_extent = 0.075f;  ///< half side of the orthographic patch window, mesh units (spec 2.4)
