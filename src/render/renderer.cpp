@@ -174,73 +174,89 @@ public:
     }
 
     // Shades G-buffer tile `g` into `out`, targets of the tile's size (Targets::tile): the texture
-    // lookups per pixel, the shading arithmetic over the whole tile at once (shade_lanes), then
-    // the passes per pixel.
-    void shade(const GBuffer& g, const Targets& out) const {
+    // lookups for the whole tile, the shading arithmetic over the whole tile at once
+    // (shade_lanes), then the passes.
+    void shade(const GBufferLanes& g, const Targets& out) const {
         static thread_local ShadeLanes lanes;  // per thread, reused: no allocation per tile
         fill_lanes(g, lanes);
-        if (m_need_frame) shade_lanes(lanes, m_lane_constants);
+        if (m_need_frame) shade_lanes(g, lanes, m_lane_constants);
         write_passes(g, lanes, out);
     }
 
 private:
-    // The passes one at a time over the whole tile: each pass is one contiguous stream, and the
-    // choice of passes is made once a tile, not once a pixel. Background pixels get the G-buffer's
-    // zeros, and the background colour where it is composited.
-    void write_passes(const GBuffer& g, const ShadeLanes& l, const Targets& out) const {
-        const std::size_t n = g.pixel_count();
-        const float* mask = g.mask.data();
+    // The passes one at a time over the whole tile: the choice of passes is made once a tile, not
+    // once a pixel. Lane i goes to tile pixel g.pixel[i] (lanes outside the image are skipped).
+    // Background pixels get the G-buffer's zeros, and the background colour where it is
+    // composited.
+    void write_passes(const GBufferLanes& g, const ShadeLanes& l, const Targets& out) const {
+        const int n = g.count;
+        const int* pixel = g.pixel;
+        const float* mask = g.mask;
         const auto pass = [&](Pass p) { return out.base[std::size_t(p)]; };
-        // Vec3f is three packed floats, so a G-buffer vector is the pass's pixels as they are.
-        static_assert(sizeof(Vec3f) == 3 * sizeof(float));
-        const auto copy3 = [n](const Vec3f* from, float* to) {
-            std::copy_n(reinterpret_cast<const float*>(from), 3 * n, to);
+        const auto each = [&](auto&& write) {
+            for (int i = 0; i < n; ++i)
+                if (pixel[i] >= 0) write(std::size_t(pixel[i]), i);
+        };
+        const auto copy1 = [&](const float* from, float* to) {
+            each([&](std::size_t o, int i) { to[o] = from[i]; });
+        };
+        const auto copy3 = [&](const float* x, const float* y, const float* z, float* to) {
+            each([&](std::size_t o, int i) { to[3 * o] = x[i], to[3 * o + 1] = y[i], to[3 * o + 2] = z[i]; });
         };
         // Lanes whose pixel missed hold whatever shading computed from zeros: write zeros there.
         const auto hits3 = [&](const float* x, const float* y, const float* z, float* to) {
-            for (std::size_t i = 0; i < n; ++i) {
+            each([&](std::size_t o, int i) {
                 const bool hit = mask[i] > 0.f;
-                to[3 * i] = hit ? x[i] : 0.f, to[3 * i + 1] = hit ? y[i] : 0.f, to[3 * i + 2] = hit ? z[i] : 0.f;
-            }
+                to[3 * o] = hit ? x[i] : 0.f, to[3 * o + 1] = hit ? y[i] : 0.f,
+                       to[3 * o + 2] = hit ? z[i] : 0.f;
+            });
         };
-        std::copy_n(mask, n, out.coverage);
-        if (float* o = pass(Pass::Mask)) std::copy_n(mask, n, o);
-        if (float* o = pass(Pass::Depth)) std::copy_n(g.depth.data(), n, o);
-        if (float* o = pass(Pass::Normal)) copy3(g.normal.data(), o);
-        if (float* o = pass(Pass::Tangent)) copy3(g.tangent.data(), o);
+        copy1(mask, out.coverage);
+        if (float* o = pass(Pass::Mask)) copy1(mask, o);
+        if (float* o = pass(Pass::Depth)) copy1(g.depth, o);
+        if (float* o = pass(Pass::Normal)) copy3(g.nx, g.ny, g.nz, o);
+        if (float* o = pass(Pass::Tangent)) copy3(g.tx, g.ty, g.tz, o);
         if (float* o = pass(Pass::Uv))
-            for (std::size_t i = 0; i < n; ++i) {
+            each([&](std::size_t p, int i) {
                 const bool hit = mask[i] > 0.f;
-                o[2 * i] = hit ? g.uv[i].x : 0.f;
-                o[2 * i + 1] = hit ? 1.f - g.uv[i].y : 0.f;  // the reference's v' (spec 3.9)
-            }
+                o[2 * p] = hit ? g.u[i] : 0.f;
+                o[2 * p + 1] = hit ? 1.f - g.v[i] : 0.f;  // the reference's v' (spec 3.9)
+            });
         if (float* o = pass(Pass::Label))
-            for (std::size_t i = 0; i < n; ++i) {
+            each([&](std::size_t p, int i) {
                 Vec3f label;
                 if (mask[i] > 0.f && m_mat.label) {
-                    PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
-                    label = sample_rgb(*m_mat.label, g.uv[i], lod, true, m_tactile_max_level);
+                    const UvLanes uv = uv_lanes(g);
+                    PixelLod lod(uv.duv_dx(std::size_t(i)), uv.duv_dy(std::size_t(i)));
+                    label = sample_rgb(*m_mat.label, uv.uv(std::size_t(i)), lod, true, m_tactile_max_level);
                 }
-                put3(o + 3 * i, label);
-            }
-        if (float* o = pass(Pass::Albedo)) copy3(l.albedo, o);  // misses hold the background (fill_lanes)
+                put3(o + 3 * p, label);
+            });
+        if (float* o = pass(Pass::Albedo))  // misses hold the background (fill_lanes)
+            each([&](std::size_t p, int i) { put3(o + 3 * p, l.albedo[i]); });
         if (!m_need_frame) return;
         if (float* o = pass(Pass::TactileNormal)) hits3(l.tnx, l.tny, l.tnz, o);
         if (float* o = pass(Pass::ShadingNormal)) hits3(l.snx, l.sny, l.snz, o);
         if (float* o = pass(Pass::ShadingNormalViewspace)) hits3(l.vx, l.vy, l.vz, o);
         if (float* o = pass(Pass::Lambertian))
-            for (std::size_t i = 0; i < n; ++i)
-                put3(o + 3 * i, mask[i] > 0.f ? lit_color(l.albedo[i], l.shade[i], m_color_space) : m_background);
+            each([&](std::size_t p, int i) {
+                put3(o + 3 * p,
+                     mask[i] > 0.f ? lit_color(l.albedo[i], l.shade[i], m_color_space) : m_background);
+            });
     }
 
-    // The albedo of hit pixel i, when the maps are not looked up as a pair.
-    Vec3f albedo_at(const GBuffer& g, std::size_t i) const {
+    static UvLanes uv_lanes(const GBufferLanes& g) { return {g.u, g.v, g.du_dx, g.dv_dx, g.du_dy, g.dv_dy}; }
+
+    // The albedo of hit lane i, when the maps are not looked up as a pair.
+    Vec3f albedo_at(const GBufferLanes& g, int i) const {
         using Source = SurfaceMaterial::AlbedoSource;
         if (m_mat.albedo_source == Source::Texture) {
-            PixelLod lod(g.duv_dx[i], g.duv_dy[i]);
-            return sample_rgb(*m_mat.albedo, g.uv[i], lod, m_albedo_mipmapped, -1);
+            const UvLanes uv = uv_lanes(g);
+            PixelLod lod(uv.duv_dx(std::size_t(i)), uv.duv_dy(std::size_t(i)));
+            return sample_rgb(*m_mat.albedo, uv.uv(std::size_t(i)), lod, m_albedo_mipmapped, -1);
         }
-        if (m_mat.albedo_source == Source::VertexColors) return vertex_color_at(m_mesh, g, i);
+        if (m_mat.albedo_source == Source::VertexColors)
+            return vertex_color_at(m_mesh, g.triangle[i], {g.b1[i], g.b2[i]});
         return m_mat.albedo_constant;
     }
 
@@ -251,23 +267,28 @@ private:
         float tactile[ShadeLanes::kMax * kMaxTextureChannels];
     };
 
-    // The lanes' inputs: the G-buffer's frame and position, and the texture lookups of the hits.
-    // The tactile map is looked up for the whole tile at once, together with the albedo when
-    // both maps have one size and one filter (training shading's default: one LOD and one
-    // bilinear footprint a level for both).
-    void fill_lanes(const GBuffer& g, ShadeLanes& l) const {
-        const std::size_t n = g.pixel_count();
-        l.count = int(n);
+    // The lanes' inputs: the texture lookups of the hits. The tactile map is looked up for the
+    // whole tile at once, together with the albedo when both maps have one size and one filter
+    // (training shading's default: one LOD and one bilinear footprint a level for both).
+    void fill_lanes(const GBufferLanes& g, ShadeLanes& l) const {
+        const std::size_t n = std::size_t(g.count);
+        l.count = g.count;
         const bool want_tactile = m_need_frame && m_mat.tactile;
         const bool pairs = m_paired_maps && m_need_albedo && want_tactile;
         static thread_local TilePairs tile;
+        const UvLanes uv = uv_lanes(g);
         if (pairs)
-            m_mat.albedo->sample_trilinear_pairs(*m_mat.tactile, n, g.mask.data(), g.uv.data(), g.duv_dx.data(),
-                                                 g.duv_dy.data(), tile.lod, tile.albedo, tile.tactile, -1);
+            m_mat.albedo->sample_trilinear_pairs(
+                *m_mat.tactile, n, g.mask, uv, tile.lod, tile.albedo, tile.tactile, -1);
         else if (want_tactile)
             // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
-            m_mat.tactile->sample_trilinear_many(n, g.mask.data(), g.uv.data(), g.duv_dx.data(), g.duv_dy.data(),
-                                                 m_tactile_scale, m_tactile_lod_offset, tile.lod, tile.tactile,
+            m_mat.tactile->sample_trilinear_many(n,
+                                                 g.mask,
+                                                 uv,
+                                                 m_tactile_scale,
+                                                 m_tactile_lod_offset,
+                                                 tile.lod,
+                                                 tile.tactile,
                                                  m_tactile_max_level);
         const std::size_t ca = std::size_t(m_mat.albedo ? m_mat.albedo->channels() : 0);
         const std::size_t ct = std::size_t(m_mat.tactile ? m_mat.tactile->channels() : 0);
@@ -277,19 +298,14 @@ private:
                 if (pairs)
                     albedo = texel_rgb(*m_mat.albedo, tile.albedo + ca * i);
                 else if (m_need_albedo)
-                    albedo = albedo_at(g, i);
+                    albedo = albedo_at(g, int(i));
                 if (want_tactile) {
                     const float* t = tile.tactile + ct * i;
                     p = {t[0], t[1], t[2]};
                 }
             }
             l.albedo[i] = albedo;
-            if (!m_need_frame) continue;
             l.px[i] = p.x, l.py[i] = p.y, l.pz[i] = p.z;
-            l.nx[i] = g.normal[i].x, l.ny[i] = g.normal[i].y, l.nz[i] = g.normal[i].z;
-            l.tx[i] = g.tangent[i].x, l.ty[i] = g.tangent[i].y, l.tz[i] = g.tangent[i].z;
-            l.w[i] = g.handedness[i];
-            l.qx[i] = g.position[i].x, l.qy[i] = g.position[i].y, l.qz[i] = g.position[i].z;
         }
     }
 
@@ -350,11 +366,14 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
     std::vector<Vec4f> clip;
     if (raster || antialias) clip = clip_positions(m_mesh, camera);
     if (raster) rasterize(clip, m_mesh.triangles, camera.width, camera.height, raster_buffer);
-    auto produce_tile = [&](int x0, int y0, int x1, int y1, GBuffer& g) {
-        if (raster)
+    auto produce_tile = [&](int x0, int y0, int x1, int y1, GBufferLanes& lanes) {
+        if (raster) {
+            static thread_local GBuffer g;  // per thread, reused across tiles and frames
             interpolate_tile(raster_buffer, m_mesh, camera, x0, y0, x1, y1, g);
-        else
-            trace_tile(m_scene, m_mesh, camera, x0, y0, x1, y1, g);
+            lanes.assign(g);
+        } else {
+            trace_tile_lanes(m_scene, m_mesh, camera, x0, y0, x1, y1, lanes);
+        }
     };
     // What antialiasing needs from visibility: triangle ids and a depth ordered like z/w.
     const std::size_t pixel_count = std::size_t(camera.width) * std::size_t(camera.height);
@@ -364,21 +383,21 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
     // Stage 2 (shading): one path for both producers.
     parallel_for_tiles(
         camera.width, camera.height, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
-            // One small G-buffer per thread, reused across tiles and frames: stays in cache.
-            static thread_local GBuffer g;
+            // One G-buffer tile per thread, reused across tiles and frames: stays in cache.
+            static thread_local GBufferLanes g;
             static thread_local std::vector<float> scratch;
             produce_tile(x0, y0, x1, y1, g);
-            const Targets tile = targets.tile(scratch, g.pixel_count());
+            const Targets tile = targets.tile(scratch, std::size_t(g.width) * std::size_t(g.height));
             shader.shade(g, tile);
             targets.flush(tile, camera.width, x0, y0, g.width, g.height);
             if (antialias)
-                for (int y = y0; y < y1; ++y)
-                    for (int x = x0; x < x1; ++x) {
-                        const std::size_t i = g.index(x - x0, y - y0);
-                        const std::size_t px = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
-                        aa_triangle[px] = g.triangle[i];
-                        aa_depth[px] = raster ? raster_buffer.rast[px].z : g.depth[i];
-                    }
+                for (int i = 0; i < g.count; ++i) {
+                    if (g.pixel[i] < 0) continue;
+                    const int x = x0 + g.pixel[i] % g.width, y = y0 + g.pixel[i] / g.width;
+                    const std::size_t px = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
+                    aa_triangle[px] = g.triangle[i];
+                    aa_depth[px] = raster ? raster_buffer.rast[px].z : g.depth[i];
+                }
         });
     if (!raster) m_scene.throw_if_error("rendering");
 

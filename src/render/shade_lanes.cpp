@@ -9,15 +9,16 @@ namespace {
 
 // One lane: the scalar functions of shading.h, inlined, so the loop below vectorises.
 template <bool Training, bool PointLight>
-TDF_FORCE_INLINE void shade_lane(ShadeLanes& l, const ShadeConstants& c, int i) {
+TDF_FORCE_INLINE void shade_lane(const GBufferLanes& g, ShadeLanes& l, const ShadeConstants& c, int i) {
     Vec3f p{l.px[i], l.py[i], l.pz[i]};
     if (Training) p = safe_normalize(p);  // spec 3.1 step 5
-    const Vec3f raw = shading_normal_unnormalized({l.tx[i], l.ty[i], l.tz[i]}, {l.nx[i], l.ny[i], l.nz[i]}, l.w[i], p);
+    const Vec3f raw =
+        shading_normal_unnormalized({g.tx[i], g.ty[i], g.tz[i]}, {g.nx[i], g.ny[i], g.nz[i]}, g.w[i], p);
     const Vec3f n = safe_normalize(raw);
     const Vec3f v = Training ? view_space_normal(c.view, n)
                              : Vec3f{dot(c.view.right, raw), dot(c.view.up, raw), dot(c.view.back, raw)};
-    const Vec3f to_light = PointLight ? safe_normalize(c.light_vector - Vec3f{l.qx[i], l.qy[i], l.qz[i]})
-                                      : c.light_vector;
+    const Vec3f to_light =
+        PointLight ? safe_normalize(c.light_vector - Vec3f{g.qx[i], g.qy[i], g.qz[i]}) : c.light_vector;
     l.tnx[i] = p.x, l.tny[i] = p.y, l.tnz[i] = p.z;
     l.snx[i] = n.x, l.sny[i] = n.y, l.snz[i] = n.z;
     l.vx[i] = v.x, l.vy[i] = v.y, l.vz[i] = v.z;
@@ -25,8 +26,8 @@ TDF_FORCE_INLINE void shade_lane(ShadeLanes& l, const ShadeConstants& c, int i) 
 }
 
 template <bool Training, bool PointLight>
-TDF_FORCE_INLINE void shade_all(ShadeLanes& l, const ShadeConstants& c) {
-    for (int i = 0; i < l.count; ++i) shade_lane<Training, PointLight>(l, c, i);
+TDF_FORCE_INLINE void shade_all(const GBufferLanes& g, ShadeLanes& l, const ShadeConstants& c) {
+    for (int i = 0; i < l.count; ++i) shade_lane<Training, PointLight>(g, l, c, i);
 }
 
 }  // namespace
@@ -38,11 +39,11 @@ TDF_FORCE_INLINE void shade_all(ShadeLanes& l, const ShadeConstants& c) {
 // clone, which rounds once instead of twice. It is also built without errno for sqrt, so that
 // sqrt vectorises.
 TDF_SIMD_CLONES
-void shade_lanes(ShadeLanes& lanes, const ShadeConstants& c) {
+void shade_lanes(const GBufferLanes& g, ShadeLanes& lanes, const ShadeConstants& c) {
     if (c.training)
-        c.point_light ? shade_all<true, true>(lanes, c) : shade_all<true, false>(lanes, c);
+        c.point_light ? shade_all<true, true>(g, lanes, c) : shade_all<true, false>(g, lanes, c);
     else
-        c.point_light ? shade_all<false, true>(lanes, c) : shade_all<false, false>(lanes, c);
+        c.point_light ? shade_all<false, true>(g, lanes, c) : shade_all<false, false>(g, lanes, c);
 }
 
 }  // namespace tdf

@@ -1,12 +1,13 @@
-#include <tdf/render/texture.h>
-
 #include <tdf/core/error.h>
 #include <tdf/core/force_inline.h>
 #include <tdf/core/parallel.h>
 #include <tdf/core/simd_clones.h>
+#include <tdf/render/texture.h>
 
 #include <algorithm>
 #include <cmath>
+
+#include "texture_lanes.h"
 
 namespace tdf {
 
@@ -110,8 +111,12 @@ struct LevelPair {
     float frac;
     bool blend_next;
 };
+// The highest level a lookup may read.
+TDF_FORCE_INLINE int top_level(int level_count, int max_level) {
+    return max_level < 0 ? level_count - 1 : std::min(max_level, level_count - 1);
+}
 TDF_FORCE_INLINE LevelPair level_pair(float lod, int level_count, int max_level) {
-    const int top = max_level < 0 ? level_count - 1 : std::min(max_level, level_count - 1);
+    const int top = top_level(level_count, max_level);
     if (!(lod > 0.f)) lod = 0.f;  // also catches NaN
     lod = std::min(lod, float(top));
     const int l0 = int(lod);
@@ -179,39 +184,98 @@ void MipTexture::sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, flo
 // clone gives sample_trilinear_pair_at's bits: the same operations in the same order, no FMA
 // contraction in this file (src/CMakeLists.txt), and the same glibc log2f.
 TDF_SIMD_CLONES
-void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered, const Vec2f* uv,
-                                        const Vec2f* duv_dx, const Vec2f* duv_dy, float* lod, float* out,
-                                        float* other_out, int max_level) const {
+void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered,
+                                        const UvLanes& points, float* lod, float* out, float* other_out,
+                                        int max_level) const {
     TDF_CHECK(other.width() == width() && other.height() == height());
     const float w = float(width()), h = float(height());
-    for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(duv_dx[i], duv_dy[i], w, h);
+    for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(points.duv_dx(i), points.duv_dy(i), w, h);
     for (std::size_t i = 0; i < n; ++i)
         if (covered[i] > 0.f) lod[i] = lod_of_major(lod[i]);
     const int levels = level_count();
     const std::size_t ca = std::size_t(channels()), cb = std::size_t(other.channels());
     const bool rgb = ca == 3 && cb == 3;
+    if (rgb && sample_trilinear_pairs_in_lanes(other, n, covered, points, lod, out, other_out, max_level))
+        return;
     for (std::size_t i = 0; i < n; ++i) {
         if (!(covered[i] > 0.f)) continue;
         const LevelPair p = level_pair(lod[i], levels, max_level);
         if (rgb)
-            sample_pair<3>(m_levels, other.m_levels, uv[i], p, out + 3 * i, other_out + 3 * i);
+            sample_pair<3>(m_levels, other.m_levels, points.uv(i), p, out + 3 * i, other_out + 3 * i);
         else
-            sample_pair<0>(m_levels, other.m_levels, uv[i], p, out + ca * i, other_out + cb * i);
+            sample_pair<0>(m_levels, other.m_levels, points.uv(i), p, out + ca * i, other_out + cb * i);
     }
+}
+
+namespace {
+// The gather kernel for this CPU (texture_lanes.h), or none: the AVX-512 one where the build's
+// SIMD list has AVX-512 and the CPU too, else the AVX2 one likewise.
+using PairKernel = void (*)(texture_lanes::PairLookups&);
+PairKernel pair_kernel() {
+    static const PairKernel kernel = []() -> PairKernel {
+#if TDF_TEXTURE_LANES_AVX512
+        if (__builtin_cpu_supports("avx512f")) return &texture_lanes::sample_pairs_avx512;
+#endif
+#if TDF_TEXTURE_LANES_AVX2
+        if (__builtin_cpu_supports("avx2")) return &texture_lanes::sample_pairs_avx2;
+#endif
+        return nullptr;
+    }();
+    return kernel;
+}
+}  // namespace
+
+bool MipTexture::sample_trilinear_pairs_in_lanes(const MipTexture& other, std::size_t n, const float* covered,
+                                                 const UvLanes& points, const float* lod, float* out,
+                                                 float* other_out, int max_level) const {
+    const PairKernel kernel = pair_kernel();
+    constexpr std::size_t kMaxLevels = 32;  // a 2^31-texel side has 32 levels
+    if (!kernel || m_levels.size() > kMaxLevels) return false;
+    texture_lanes::PairLevel levels[kMaxLevels];
+    for (std::size_t k = 0; k < m_levels.size(); ++k)
+        levels[k] = {m_levels[k].data(), other.m_levels[k].data(), m_levels[k].width(), m_levels[k].height()};
+    const int count = level_count();
+    // Chunks of a tile's size: the scalar code's list lives on the stack.
+    constexpr std::size_t kChunk = 256;
+    std::uint32_t left[kChunk];
+    for (std::size_t start = 0; start < n; start += kChunk) {
+        texture_lanes::PairLookups q;
+        q.n = std::min(kChunk, n - start);
+        q.covered = covered + start;
+        q.u = points.u + start;
+        q.v = points.v + start;
+        q.lod = lod + start;
+        q.levels = levels;
+        q.top = top_level(count, max_level);
+        q.out_a = out + 3 * start;
+        q.out_b = other_out + 3 * start;
+        q.left = left;
+        kernel(q);
+        for (std::size_t k = 0; k < q.left_count; ++k) {
+            const std::size_t i = start + left[k];
+            sample_pair<3>(m_levels,
+                           other.m_levels,
+                           points.uv(i),
+                           level_pair(lod[i], count, max_level),
+                           out + 3 * i,
+                           other_out + 3 * i);
+        }
+    }
+    return true;
 }
 
 // Compiled like sample_trilinear_pairs, for the same reasons; the bits of sample_trilinear_at.
 TDF_SIMD_CLONES
-void MipTexture::sample_trilinear_many(std::size_t n, const float* covered, const Vec2f* uv, const Vec2f* duv_dx,
-                                       const Vec2f* duv_dy, float uv_scale, float lod_offset, float* lod, float* out,
+void MipTexture::sample_trilinear_many(std::size_t n, const float* covered, const UvLanes& points,
+                                       float uv_scale, float lod_offset, float* lod, float* out,
                                        int max_level) const {
     const float w = float(width()), h = float(height());
-    for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(duv_dx[i], duv_dy[i], w, h);
+    for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(points.duv_dx(i), points.duv_dy(i), w, h);
     for (std::size_t i = 0; i < n; ++i)
         if (covered[i] > 0.f) lod[i] = lod_of_major(lod[i]) + lod_offset;
     const std::size_t c = std::size_t(channels());
     for (std::size_t i = 0; i < n; ++i)
-        if (covered[i] > 0.f) trilinear_at(m_levels, uv[i] * uv_scale, lod[i], out + c * i, max_level);
+        if (covered[i] > 0.f) trilinear_at(m_levels, points.uv(i) * uv_scale, lod[i], out + c * i, max_level);
 }
 
 namespace {

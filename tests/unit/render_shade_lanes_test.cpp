@@ -28,18 +28,20 @@ void expect_same_bits(Vec3f lanes, Vec3f scalar, const char* what, int i) {
 TEST(ShadeLanes, EqualTheScalarShadingBitForBit) {
     Rng rng(25);
     auto lanes = std::make_unique<ShadeLanes>();
+    auto geometry = std::make_unique<GBufferLanes>();
     ShadeLanes& l = *lanes;
-    l.count = ShadeLanes::kMax - 3;  // not a multiple of the vector width: the loop's tail too
+    GBufferLanes& g = *geometry;
+    l.count = g.count = ShadeLanes::kMax - 3;  // not a multiple of the vector width: the loop's tail too
     for (int i = 0; i < l.count; ++i) {
         // Every 7th lane is background: a zero frame and position, a flat tactile normal.
         const bool background = i % 7 == 0;
         const Vec3f n = background ? Vec3f{} : random_vec(rng), t = background ? Vec3f{} : random_vec(rng);
         const Vec3f q = background ? Vec3f{} : random_vec(rng);
         const Vec3f p = background ? Vec3f{0, 0, 1} : random_vec(rng);
-        l.nx[i] = n.x, l.ny[i] = n.y, l.nz[i] = n.z;
-        l.tx[i] = t.x, l.ty[i] = t.y, l.tz[i] = t.z;
-        l.w[i] = i % 2 ? 1.f : -1.f;
-        l.qx[i] = q.x, l.qy[i] = q.y, l.qz[i] = q.z;
+        g.nx[i] = n.x, g.ny[i] = n.y, g.nz[i] = n.z;
+        g.tx[i] = t.x, g.ty[i] = t.y, g.tz[i] = t.z;
+        g.w[i] = i % 2 ? 1.f : -1.f;
+        g.qx[i] = q.x, g.qy[i] = q.y, g.qz[i] = q.z;
         l.px[i] = p.x, l.py[i] = p.y, l.pz[i] = p.z;
     }
     ShadeConstants c;
@@ -50,17 +52,18 @@ TEST(ShadeLanes, EqualTheScalarShadingBitForBit) {
             c.point_light = point;
             c.light_vector = point ? Vec3f{2, 3, 4} : safe_normalize({0.3f, 0.5f, 0.8f});
             c.ambient = training ? 0.5f : 0.1f;
-            shade_lanes(l, c);
+            shade_lanes(g, l, c);
             for (int i = 0; i < l.count; ++i) {
                 Vec3f p{l.px[i], l.py[i], l.pz[i]};
                 if (training) p = safe_normalize(p);
-                const Vec3f raw =
-                    shading_normal_unnormalized({l.tx[i], l.ty[i], l.tz[i]}, {l.nx[i], l.ny[i], l.nz[i]}, l.w[i], p);
+                const Vec3f raw = shading_normal_unnormalized(
+                    {g.tx[i], g.ty[i], g.tz[i]}, {g.nx[i], g.ny[i], g.nz[i]}, g.w[i], p);
                 const Vec3f n = safe_normalize(raw);
                 const Vec3f v = training ? view_space_normal(c.view, n)
                                          : Vec3f{dot(c.view.right, raw), dot(c.view.up, raw), dot(c.view.back, raw)};
-                const Vec3f to_light =
-                    point ? safe_normalize(c.light_vector - Vec3f{l.qx[i], l.qy[i], l.qz[i]}) : c.light_vector;
+                const Vec3f to_light = point
+                                           ? safe_normalize(c.light_vector - Vec3f{g.qx[i], g.qy[i], g.qz[i]})
+                                           : c.light_vector;
                 expect_same_bits({l.tnx[i], l.tny[i], l.tnz[i]}, p, "tactile normal", i);
                 expect_same_bits({l.snx[i], l.sny[i], l.snz[i]}, n, "shading normal", i);
                 expect_same_bits({l.vx[i], l.vy[i], l.vz[i]}, v, "view-space normal", i);

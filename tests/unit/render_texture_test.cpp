@@ -10,6 +10,21 @@
 using namespace tdf;
 
 namespace {
+// Points in the batched lookups' form (UvLanes: an array per component).
+struct SoaPoints {
+    std::vector<float> u, v, du_dx, dv_dx, du_dy, dv_dy;
+    SoaPoints(const std::vector<Vec2f>& uv, const std::vector<Vec2f>& dx, const std::vector<Vec2f>& dy) {
+        for (std::size_t i = 0; i < uv.size(); ++i) {
+            u.push_back(uv[i].x), v.push_back(uv[i].y);
+            du_dx.push_back(dx[i].x), dv_dx.push_back(dx[i].y), du_dy.push_back(dy[i].x),
+                dv_dy.push_back(dy[i].y);
+        }
+    }
+    UvLanes lanes() const {
+        return {u.data(), v.data(), du_dx.data(), dv_dx.data(), du_dy.data(), dv_dy.data()};
+    }
+};
+
 // 2x2 single-channel texture, rows top to bottom: [1 2; 3 4].
 MipTexture two_by_two() {
     Image img(2, 2, 1);
@@ -148,8 +163,9 @@ TEST(MipTexture, BatchedPairLookupsEqualTheSingleOnesBitForBit) {
         dx[5] = dy[5] = {};  // a zero footprint
         std::vector<float> out_a(n * std::size_t(channels), -7.f), out_b(n * 3, -7.f);
         for (const int max_level : {-1, 2}) {
-            ta.sample_trilinear_pairs(tb, n, covered.data(), uv.data(), dx.data(), dy.data(), lod.data(), out_a.data(),
-                                      out_b.data(), max_level);
+            const SoaPoints points(uv, dx, dy);
+            ta.sample_trilinear_pairs(
+                tb, n, covered.data(), points.lanes(), lod.data(), out_a.data(), out_b.data(), max_level);
             std::size_t compared = 0;
             for (std::size_t i = 0; i < n; ++i) {
                 if (!(covered[i] > 0.f)) continue;
@@ -163,6 +179,58 @@ TEST(MipTexture, BatchedPairLookupsEqualTheSingleOnesBitForBit) {
                 ++compared;
             }
             EXPECT_EQ(compared, n - n / 7 - (n % 7 > 3 ? 1 : 0));
+        }
+    }
+}
+
+// The same for the points the gather kernels take (AVX-512 or AVX2, where the CPU and the build's
+// SIMD list have them; texture_lanes.h): UVs inside [0, 1] on power-of-two and other sizes,
+// LODs that cross levels within a group of lanes, magnification, max_level caps, groups cut short
+// at the end and by uncovered points, and the points the kernels leave to the scalar code (UVs
+// that wrap, NaN) mixed in.
+TEST(MipTexture, GatheredPairLookupsEqualTheSingleOnesBitForBit) {
+    for (const int size : {256, 100}) {
+        Image a(size, size, 3), b(size, size, 3);
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x)
+                for (int k = 0; k < 3; ++k) {
+                    a.at(x, y, k) = std::sin(0.31f * float(x * (k + 1)) + 0.13f * float(y));
+                    b.at(x, y, k) = std::cos(0.19f * float(x) - 0.37f * float(y * (k + 2)));
+                }
+        const MipTexture ta(a), tb(b);
+        constexpr std::size_t n = 1000;
+        std::vector<float> covered(n), lod(n);
+        std::vector<Vec2f> uv(n), dx(n), dy(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const float s = float(i);
+            covered[i] = i % 23 == 5 || (i >= 300 && i < 340) ? 0.f : 1.f;
+            uv[i] = {std::fmod(s * 0.0137f, 1.f), 1.f - std::fmod(s * 0.0071f, 1.f)};
+            // LODs from -2 to about 9 that change every few points.
+            const float scale = std::exp2(s * 0.011f - 2.f + 0.5f * std::sin(s)) / float(size);
+            dx[i] = {scale, 0.2f * scale * std::sin(s)};
+            dy[i] = {0.1f * scale * std::cos(s), scale};
+        }
+        uv[17] = {1.f, 0.f}, uv[18] = {0.f, 1.f}, uv[19] = {0.9999999f, 1e-7f};  // the edges
+        uv[40] = {1.25f, 0.5f}, uv[41] = {0.5f, -0.5f};  // wrap: left to the scalar code
+        uv[42] = {std::nanf(""), 0.5f};
+        std::vector<float> out_a(n * 3, -7.f), out_b(n * 3, -7.f);
+        for (const int max_level : {-1, 3, 0}) {
+            const SoaPoints points(uv, dx, dy);
+            ta.sample_trilinear_pairs(
+                tb, n, covered.data(), points.lanes(), lod.data(), out_a.data(), out_b.data(), max_level);
+            for (std::size_t i = 0; i < n; ++i) {
+                if (!(covered[i] > 0.f)) {
+                    ASSERT_EQ(out_a[3 * i], -7.f) << "uncovered point " << i << " was written";
+                    continue;
+                }
+                float want_a[3], want_b[3];
+                ta.sample_trilinear_pair_at(
+                    tb, uv[i], ta.level_of_detail(dx[i], dy[i]), want_a, want_b, max_level);
+                ASSERT_EQ(std::memcmp(want_a, &out_a[3 * i], sizeof want_a), 0)
+                    << "size " << size << " max_level " << max_level << " point " << i;
+                ASSERT_EQ(std::memcmp(want_b, &out_b[3 * i], sizeof want_b), 0)
+                    << "size " << size << " max_level " << max_level << " point " << i;
+            }
         }
     }
 }
@@ -190,8 +258,9 @@ TEST(MipTexture, BatchedLookupsEqualTheSingleOnesBitForBit) {
         for (const float uv_scale : {1.f, 11.9f})
             for (const int max_level : {-1, 5, 1}) {
                 const float offset = std::log2(uv_scale);
-                tex.sample_trilinear_many(n, covered.data(), uv.data(), dx.data(), dy.data(), uv_scale, offset, lod.data(),
-                                          out.data(), max_level);
+                const SoaPoints points(uv, dx, dy);
+                tex.sample_trilinear_many(
+                    n, covered.data(), points.lanes(), uv_scale, offset, lod.data(), out.data(), max_level);
                 for (std::size_t i = 0; i < n; ++i) {
                     if (!(covered[i] > 0.f)) continue;
                     float want[kMaxTextureChannels];
@@ -208,5 +277,7 @@ TEST(MipTextureDeathTest, BatchedPairLookupsNeedMapsOfOneSize) {
     const MipTexture a(Image(8, 8, 3)), b(Image(8, 4, 3));
     float covered = 1.f, lod = 0.f, out_a[3], out_b[3];
     const Vec2f uv{0.5f, 0.5f}, d{0.1f, 0.f};
-    EXPECT_DEATH(a.sample_trilinear_pairs(b, 1, &covered, &uv, &d, &d, &lod, out_a, out_b), "internal check failed");
+    const SoaPoints points({uv}, {d}, {d});
+    EXPECT_DEATH(a.sample_trilinear_pairs(b, 1, &covered, points.lanes(), &lod, out_a, out_b),
+                 "internal check failed");
 }

@@ -1,10 +1,13 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/render/trace.h>
 #include <tdf/scene/procedural_mesh.h>
 
-#include <gtest/gtest.h>
-
+#include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <memory>
+#include <vector>
 
 using namespace tdf;
 
@@ -133,6 +136,68 @@ TEST(Trace, ShadingFieldsEqualTheFullGBuffersAndLeaveOutIdsAndDepth) {
     for (std::size_t i = 0; i < full.pixel_count(); ++i) {
         ASSERT_EQ(lean.triangle[i], full.triangle[i]);
         ASSERT_EQ(lean.depth[i], full.depth[i]);
+    }
+}
+
+// The renderer's tiles in lanes (trace_tile_lanes: a packet at a time, the per-hit arithmetic
+// vectorised) hold what the full-frame G-buffer holds, bit for bit, every pixel in exactly one
+// lane: with and without tangents and UVs, on tiles cut short by the image's edges (100 x 70 is
+// no multiple of 64 x 4), background included.
+TEST(Trace, TileLanesEqualTheFullGBufferBitForBit) {
+    TriangleMesh full_mesh = make_uv_sphere(1.f, 48, 24);
+    TriangleMesh no_tangents = full_mesh;
+    no_tangents.tangents.clear();
+    no_tangents.tangent_triangles.clear();
+    TriangleMesh no_uvs = no_tangents;
+    no_uvs.uvs.clear();
+    no_uvs.uv_triangles.clear();
+    const auto bits = [](const float* a, const float* b) { return std::memcmp(a, b, sizeof(float)) == 0; };
+    for (const TriangleMesh* mesh : {&full_mesh, &no_tangents, &no_uvs}) {
+        const EmbreeScene scene(*mesh);
+        const Camera cam = Camera::orbit(10, 40, 2.5f, 49.1f, 100, 70);
+        const GBuffer g = trace_gbuffer(scene, *mesh, cam);
+        std::vector<int> seen(g.pixel_count(), 0);
+        std::size_t hits = 0;
+        auto lanes = std::make_unique<GBufferLanes>();
+        for (int y0 = 0; y0 < cam.height; y0 += kTraceTileHeight)
+            for (int x0 = 0; x0 < cam.width; x0 += kTraceTileWidth) {
+                const int x1 = std::min(x0 + kTraceTileWidth, cam.width),
+                          y1 = std::min(y0 + kTraceTileHeight, cam.height);
+                GBufferLanes& l = *lanes;
+                trace_tile_lanes(scene, *mesh, cam, x0, y0, x1, y1, l);
+                ASSERT_EQ(l.width, x1 - x0);
+                ASSERT_EQ(l.height, y1 - y0);
+                for (int k = 0; k < l.count; ++k) {
+                    if (l.pixel[k] < 0) {
+                        ASSERT_EQ(l.mask[k], 0.f);
+                        continue;
+                    }
+                    const std::size_t i = g.index(x0 + l.pixel[k] % l.width, y0 + l.pixel[k] / l.width);
+                    ++seen[i];
+                    hits += l.mask[k] > 0.f;
+                    const auto same = [&](const float* lane, const float* pixel) {
+                        return bits(lane + k, pixel);
+                    };
+                    ASSERT_TRUE(same(l.mask, &g.mask[i]) && l.triangle[k] == g.triangle[i] &&
+                                same(l.b1, &g.barycentric[i].x) && same(l.b2, &g.barycentric[i].y) &&
+                                same(l.depth, &g.depth[i]))
+                        << "pixel " << i;
+                    ASSERT_TRUE(same(l.qx, &g.position[i].x) && same(l.qy, &g.position[i].y) &&
+                                same(l.qz, &g.position[i].z) && same(l.nx, &g.normal[i].x) &&
+                                same(l.ny, &g.normal[i].y) && same(l.nz, &g.normal[i].z))
+                        << "pixel " << i;
+                    ASSERT_TRUE(same(l.tx, &g.tangent[i].x) && same(l.ty, &g.tangent[i].y) &&
+                                same(l.tz, &g.tangent[i].z) && same(l.w, &g.handedness[i]))
+                        << "pixel " << i;
+                    ASSERT_TRUE(same(l.u, &g.uv[i].x) && same(l.v, &g.uv[i].y) &&
+                                same(l.du_dx, &g.duv_dx[i].x) && same(l.dv_dx, &g.duv_dx[i].y) &&
+                                same(l.du_dy, &g.duv_dy[i].x) && same(l.dv_dy, &g.duv_dy[i].y))
+                        << "pixel " << i;
+                }
+            }
+        for (std::size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << "pixel " << i;
+        EXPECT_GT(hits, g.pixel_count() / 4);
+        EXPECT_LT(hits, g.pixel_count());
     }
 }
 

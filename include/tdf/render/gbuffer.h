@@ -4,7 +4,8 @@
 /// other attribute zero (as the rasterizer's interpolation gives, spec 3.1).
 ///
 /// The one interface between visibility and shading: the ray tracer (trace.h) and the
-/// rasterizer (raster.h) both produce it, and the renderer shades it with one code path.
+/// rasterizer (raster.h) both produce it, and the renderer shades it with one code path (a tile
+/// at a time in structure-of-arrays form, gbuffer_lanes.h, which the tracer fills directly).
 #include <tdf/core/vec.h>
 
 #include <cstddef>

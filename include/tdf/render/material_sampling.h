@@ -12,12 +12,15 @@ inline Vec3f texel_rgb(const MipTexture& texture, const float* texel) {
     return texture.channels() >= 3 ? Vec3f{texel[0], texel[1], texel[2]} : Vec3f{texel[0], texel[0], texel[0]};
 }
 
-/// The mesh's vertex colour interpolated at pixel `i` (a hit) with the hit's barycentrics.
-inline Vec3f vertex_color_at(const TriangleMesh& mesh, const GBuffer& g, std::size_t i) {
-    const Vec3i& t = mesh.triangles[std::size_t(g.triangle[i])];
-    const Vec2f b = g.barycentric[i];
+/// The mesh's vertex colour interpolated on `triangle` at barycentrics b = (b1, b2).
+inline Vec3f vertex_color_at(const TriangleMesh& mesh, int triangle, Vec2f b) {
+    const Vec3i& t = mesh.triangles[std::size_t(triangle)];
     return mesh.colors[std::size_t(t.x)] * (1.f - b.x - b.y) + mesh.colors[std::size_t(t.y)] * b.x +
            mesh.colors[std::size_t(t.z)] * b.y;
+}
+/// The same at pixel `i` of `g` (a hit).
+inline Vec3f vertex_color_at(const TriangleMesh& mesh, const GBuffer& g, std::size_t i) {
+    return vertex_color_at(mesh, g.triangle[i], g.barycentric[i]);
 }
 
 /// Albedo of pixel `i` (a hit) from the material's source: texture (trilinear over the whole

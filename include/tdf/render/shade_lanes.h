@@ -4,20 +4,17 @@
 // (16 lanes with AVX-512, 8 with AVX2, chosen at load time). Each lane computes exactly what the
 // scalar functions of shading.h compute, in the same order, so every result is bit-identical.
 #include <tdf/core/vec.h>
+#include <tdf/render/gbuffer_lanes.h>
 #include <tdf/render/shading.h>
-#include <tdf/render/trace.h>
 
 namespace tdf {
 
-// One tile's lanes: inputs from the G-buffer and the texture lookups, outputs for the passes.
+// One tile's shading lanes, beside its G-buffer lanes (gbuffer_lanes.h: the frame and position
+// each lane is shaded with): the texture lookups' results, and the outputs for the passes.
 struct ShadeLanes {
-    static constexpr int kMax = kTraceTilePixels;
+    static constexpr int kMax = GBufferLanes::kMax;
     int count = 0;
-    // Inputs: interpolated normal N and tangent T, handedness w, world position, the sampled
-    // tangent-space tactile normal p (not normalised).
-    alignas(64) float nx[kMax], ny[kMax], nz[kMax];
-    alignas(64) float tx[kMax], ty[kMax], tz[kMax], w[kMax];
-    alignas(64) float qx[kMax], qy[kMax], qz[kMax];
+    // Input: the sampled tangent-space tactile normal p (not normalised).
     alignas(64) float px[kMax], py[kMax], pz[kMax];
     // Outputs: the tactile normal as drawn (normalised in training), the shading normal, the
     // view-space normal and the diffuse shade.
@@ -37,7 +34,7 @@ struct ShadeConstants {
     float ambient = 0.5f;
 };
 
-// Computes the outputs of lanes [0, count).
-void shade_lanes(ShadeLanes& lanes, const ShadeConstants& c);
+// Computes the outputs of lanes [0, lanes.count), lane i shaded with g's lane i.
+void shade_lanes(const GBufferLanes& g, ShadeLanes& lanes, const ShadeConstants& c);
 
 }  // namespace tdf

@@ -23,6 +23,20 @@ struct TrilinearTaps {
     float weight[kMaxTaps] = {};
 };
 
+/// Points to look up, one array per component: UVs (v up) and their derivatives per output pixel
+/// (the renderer's G-buffer lanes).
+struct UvLanes {
+    const float* u;
+    const float* v;
+    const float* du_dx;
+    const float* dv_dx;
+    const float* du_dy;
+    const float* dv_dy;
+    Vec2f uv(std::size_t i) const { return {u[i], v[i]}; }
+    Vec2f duv_dx(std::size_t i) const { return {du_dx[i], dv_dx[i]}; }
+    Vec2f duv_dy(std::size_t i) const { return {du_dy[i], dv_dy[i]}; }
+};
+
 /// Largest channel count a MipTexture accepts (per-sample scratch lives on the stack).
 constexpr int kMaxTextureChannels = 16;
 
@@ -73,18 +87,19 @@ public:
     void sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, float lod, float* out, float* other_out,
                                   int max_level = -1) const;
     /// sample_trilinear_pair_at for the n points with covered[i] > 0, each at the LOD
-    /// level_of_detail(duv_dx[i], duv_dy[i]) (bit for bit): point i's texels go to
+    /// level_of_detail(points.duv_dx(i), points.duv_dy(i)) (bit for bit): point i's texels go to
     /// out + i * channels() and other_out + i * other.channels(); `lod` is n floats of scratch.
-    /// The whole tile at once lets the LODs' arithmetic vectorise.
-    void sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered, const Vec2f* uv,
-                                const Vec2f* duv_dx, const Vec2f* duv_dy, float* lod, float* out, float* other_out,
+    /// The whole tile at once lets the LODs' arithmetic vectorise, and two RGB maps are read with
+    /// the CPU's gather instructions where it has them (AVX-512 or AVX2).
+    void sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered,
+                                const UvLanes& points, float* lod, float* out, float* other_out,
                                 int max_level = -1) const;
-    /// sample_trilinear_at(uv[i] * uv_scale, level_of_detail(duv_dx[i], duv_dy[i]) + lod_offset,
-    /// out + i * channels(), max_level) for the n points with covered[i] > 0, bit for bit (a map
-    /// laid at a UV scale: its LOD moves by log2 of the scale); `lod` is n floats of scratch.
-    void sample_trilinear_many(std::size_t n, const float* covered, const Vec2f* uv, const Vec2f* duv_dx,
-                               const Vec2f* duv_dy, float uv_scale, float lod_offset, float* lod, float* out,
-                               int max_level = -1) const;
+    /// sample_trilinear_at(points.uv(i) * uv_scale, level_of_detail(points.duv_dx(i),
+    /// points.duv_dy(i)) + lod_offset, out + i * channels(), max_level) for the n points with
+    /// covered[i] > 0, bit for bit (a map laid at a UV scale: its LOD moves by log2 of the
+    /// scale); `lod` is n floats of scratch.
+    void sample_trilinear_many(std::size_t n, const float* covered, const UvLanes& points, float uv_scale,
+                               float lod_offset, float* lod, float* out, int max_level = -1) const;
     /// The texels and weights sample_trilinear_at(uv, lod, out, max_level) blends (same LOD
     /// clamping, same wrap addressing), for optimizers that need the adjoint (texture_gradient.h).
     /// Weights sum to 1.
@@ -96,6 +111,12 @@ public:
     float level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const;
 
 private:
+    /// sample_trilinear_pairs of two RGB maps with the CPU's gather instructions (texture_lanes.h),
+    /// the LODs already in `lod`; false when this CPU or build has none.
+    bool sample_trilinear_pairs_in_lanes(const MipTexture& other, std::size_t n, const float* covered,
+                                         const UvLanes& points, const float* lod, float* out,
+                                         float* other_out, int max_level) const;
+
     std::vector<Image> m_levels;
 };
 

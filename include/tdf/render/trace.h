@@ -4,6 +4,7 @@
 /// there is no back-face culling, and pixel centres are at (j + 0.5, i + 0.5).
 #include <tdf/mesh/triangle_mesh.h>
 #include <tdf/render/gbuffer.h>
+#include <tdf/render/gbuffer_lanes.h>
 #include <tdf/scene/camera.h>
 #include <tdf/scene/embree_scene.h>
 
@@ -31,6 +32,13 @@ void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Cam
 /// that shade each tile right after tracing it from a small, cache-resident buffer.
 void trace_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0, int x1,
                 int y1, GBuffer& tile);
+
+/// The same tile into lanes (gbuffer_lanes.h), a packet at a time in packet order: the same
+/// values trace_tile gives each pixel, for a renderer that shades in lanes. The tile holds at most
+/// GBufferLanes::kMax pixels.
+void trace_tile_lanes(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0,
+                      int y0, int x1, int y1, GBufferLanes& out);
+static_assert(kTraceTilePixels == GBufferLanes::kMax, "a trace tile fills the lanes");
 
 /// Baseline for benchmarks: the same packets and tiles, closest hit only; writes the hit
 /// distance (0 on a miss) per pixel to `t` and returns the number of hits.
