@@ -233,7 +233,7 @@ private:
                 put3(o + 3 * p, label);
             });
         if (float* o = pass(Pass::Albedo))  // misses hold the background (fill_lanes)
-            each([&](std::size_t p, int i) { put3(o + 3 * p, l.albedo[i]); });
+            copy3(l.albedo[0], l.albedo[1], l.albedo[2], o);
         if (!m_need_frame) return;
         if (float* o = pass(Pass::TactileNormal)) hits3(l.tnx, l.tny, l.tnz, o);
         if (float* o = pass(Pass::ShadingNormal)) hits3(l.snx, l.sny, l.snz, o);
@@ -241,7 +241,7 @@ private:
         if (float* o = pass(Pass::Lambertian))
             each([&](std::size_t p, int i) {
                 put3(o + 3 * p,
-                     mask[i] > 0.f ? lit_color(l.albedo[i], l.shade[i], m_color_space) : m_background);
+                     mask[i] > 0.f ? lit_color(l.albedo_at(i), l.shade[i], m_color_space) : m_background);
             });
     }
 
@@ -260,26 +260,33 @@ private:
         return m_mat.albedo_constant;
     }
 
-    // The texels of a tile's lookups (sample_trilinear_pairs, sample_trilinear_many).
-    struct TilePairs {
+    // Planes for lookups of maps with other than 3 channels (sample_trilinear_pairs and
+    // sample_trilinear_many write one plane a channel).
+    struct TilePlanes {
         float lod[ShadeLanes::kMax];
-        float albedo[ShadeLanes::kMax * kMaxTextureChannels];
-        float tactile[ShadeLanes::kMax * kMaxTextureChannels];
+        float albedo[kMaxTextureChannels][ShadeLanes::kMax];
+        float tactile[kMaxTextureChannels][ShadeLanes::kMax];
     };
 
-    // The lanes' inputs: the texture lookups of the hits. The tactile map is looked up for the
-    // whole tile at once, together with the albedo when both maps have one size and one filter
-    // (training shading's default: one LOD and one bilinear footprint a level for both).
+    // The lanes' inputs: the texture lookups of the hits, RGB maps straight into the lanes'
+    // planes. The tactile map is looked up for the whole tile at once, together with the albedo
+    // when both maps have one size and one filter (training shading's default: one LOD and one
+    // bilinear footprint a level for both).
     void fill_lanes(const GBufferLanes& g, ShadeLanes& l) const {
         const std::size_t n = std::size_t(g.count);
         l.count = g.count;
         const bool want_tactile = m_need_frame && m_mat.tactile;
         const bool pairs = m_paired_maps && m_need_albedo && want_tactile;
-        static thread_local TilePairs tile;
+        static thread_local TilePlanes tile;
+        const std::size_t plane = ShadeLanes::kMax;
+        const int ca = m_mat.albedo ? m_mat.albedo->channels() : 0;
+        const int ct = m_mat.tactile ? m_mat.tactile->channels() : 0;
+        float* albedo = ca == 3 ? l.albedo[0] : tile.albedo[0];
+        float* tactile = ct == 3 ? l.p[0] : tile.tactile[0];
         const UvLanes uv = uv_lanes(g);
         if (pairs)
             m_mat.albedo->sample_trilinear_pairs(
-                *m_mat.tactile, n, g.mask, uv, tile.lod, tile.albedo, tile.tactile, -1);
+                *m_mat.tactile, n, g.mask, uv, tile.lod, albedo, tactile, plane, -1);
         else if (want_tactile)
             // The layout scales UVs and therefore their derivatives: LOD + log2(scale).
             m_mat.tactile->sample_trilinear_many(n,
@@ -288,24 +295,32 @@ private:
                                                  m_tactile_scale,
                                                  m_tactile_lod_offset,
                                                  tile.lod,
-                                                 tile.tactile,
+                                                 tactile,
+                                                 plane,
                                                  m_tactile_max_level);
-        const std::size_t ca = std::size_t(m_mat.albedo ? m_mat.albedo->channels() : 0);
-        const std::size_t ct = std::size_t(m_mat.tactile ? m_mat.tactile->channels() : 0);
+        const auto set = [](float(*planes)[ShadeLanes::kMax], std::size_t i, Vec3f v) {
+            planes[0][i] = v.x, planes[1][i] = v.y, planes[2][i] = v.z;
+        };
+        // The planes of a map with 1, 2 or 4+ channels, as RGB (texel_rgb: grey below 3).
+        const auto rgb = [](const float(*planes)[ShadeLanes::kMax], int channels, std::size_t i) {
+            return channels >= 3 ? Vec3f{planes[0][i], planes[1][i], planes[2][i]}
+                                 : Vec3f{planes[0][i], planes[0][i], planes[0][i]};
+        };
         for (std::size_t i = 0; i < n; ++i) {
-            Vec3f albedo = m_background, p{0, 0, 1};
-            if (g.mask[i] > 0.f) {
-                if (pairs)
-                    albedo = texel_rgb(*m_mat.albedo, tile.albedo + ca * i);
-                else if (m_need_albedo)
-                    albedo = albedo_at(g, int(i));
-                if (want_tactile) {
-                    const float* t = tile.tactile + ct * i;
-                    p = {t[0], t[1], t[2]};
-                }
+            if (!(g.mask[i] > 0.f)) {
+                set(l.albedo, i, m_background);
+                set(l.p, i, {0, 0, 1});
+                continue;
             }
-            l.albedo[i] = albedo;
-            l.px[i] = p.x, l.py[i] = p.y, l.pz[i] = p.z;
+            if (pairs) {
+                if (ca != 3) set(l.albedo, i, rgb(tile.albedo, ca, i));
+            } else {
+                set(l.albedo, i, m_need_albedo ? albedo_at(g, int(i)) : m_background);
+            }
+            if (!want_tactile)
+                set(l.p, i, {0, 0, 1});
+            else if (ct != 3)
+                set(l.p, i, rgb(tile.tactile, ct, i));
         }
     }
 

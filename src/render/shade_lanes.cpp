@@ -10,7 +10,7 @@ namespace {
 // One lane: the scalar functions of shading.h, inlined, so the loop below vectorises.
 template <bool Training, bool PointLight>
 TDF_FORCE_INLINE void shade_lane(const GBufferLanes& g, ShadeLanes& l, const ShadeConstants& c, int i) {
-    Vec3f p{l.px[i], l.py[i], l.pz[i]};
+    Vec3f p{l.p[0][i], l.p[1][i], l.p[2][i]};
     if (Training) p = safe_normalize(p);  // spec 3.1 step 5
     const Vec3f raw =
         shading_normal_unnormalized({g.tx[i], g.ty[i], g.tz[i]}, {g.nx[i], g.ny[i], g.nz[i]}, g.w[i], p);

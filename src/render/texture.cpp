@@ -183,11 +183,19 @@ void MipTexture::sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, flo
 // the LODs' arithmetic vectorises, and the footprints use the instruction sets' rounding. Every
 // clone gives sample_trilinear_pair_at's bits: the same operations in the same order, no FMA
 // contraction in this file (src/CMakeLists.txt), and the same glibc log2f.
+namespace {
+// Point i's c channels from `texel` into planes: out[k * plane + i].
+TDF_FORCE_INLINE void put_planes(const float* texel, std::size_t c, float* out, std::size_t plane,
+                                 std::size_t i) {
+    for (std::size_t k = 0; k < c; ++k) out[k * plane + i] = texel[k];
+}
+}  // namespace
+
 TDF_SIMD_CLONES
 void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered,
                                         const UvLanes& points, float* lod, float* out, float* other_out,
-                                        int max_level) const {
-    TDF_CHECK(other.width() == width() && other.height() == height());
+                                        std::size_t plane, int max_level) const {
+    TDF_CHECK(other.width() == width() && other.height() == height() && plane >= n);
     const float w = float(width()), h = float(height());
     for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(points.duv_dx(i), points.duv_dy(i), w, h);
     for (std::size_t i = 0; i < n; ++i)
@@ -195,15 +203,19 @@ void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, 
     const int levels = level_count();
     const std::size_t ca = std::size_t(channels()), cb = std::size_t(other.channels());
     const bool rgb = ca == 3 && cb == 3;
-    if (rgb && sample_trilinear_pairs_in_lanes(other, n, covered, points, lod, out, other_out, max_level))
+    if (rgb &&
+        sample_trilinear_pairs_in_lanes(other, n, covered, points, lod, out, other_out, plane, max_level))
         return;
     for (std::size_t i = 0; i < n; ++i) {
         if (!(covered[i] > 0.f)) continue;
         const LevelPair p = level_pair(lod[i], levels, max_level);
+        float a[kMaxTextureChannels], b[kMaxTextureChannels];
         if (rgb)
-            sample_pair<3>(m_levels, other.m_levels, points.uv(i), p, out + 3 * i, other_out + 3 * i);
+            sample_pair<3>(m_levels, other.m_levels, points.uv(i), p, a, b);
         else
-            sample_pair<0>(m_levels, other.m_levels, points.uv(i), p, out + ca * i, other_out + cb * i);
+            sample_pair<0>(m_levels, other.m_levels, points.uv(i), p, a, b);
+        put_planes(a, ca, out, plane, i);
+        put_planes(b, cb, other_out, plane, i);
     }
 }
 
@@ -227,7 +239,7 @@ PairKernel pair_kernel() {
 
 bool MipTexture::sample_trilinear_pairs_in_lanes(const MipTexture& other, std::size_t n, const float* covered,
                                                  const UvLanes& points, const float* lod, float* out,
-                                                 float* other_out, int max_level) const {
+                                                 float* other_out, std::size_t plane, int max_level) const {
     const PairKernel kernel = pair_kernel();
     constexpr std::size_t kMaxLevels = 32;  // a 2^31-texel side has 32 levels
     if (!kernel || m_levels.size() > kMaxLevels) return false;
@@ -247,18 +259,18 @@ bool MipTexture::sample_trilinear_pairs_in_lanes(const MipTexture& other, std::s
         q.lod = lod + start;
         q.levels = levels;
         q.top = top_level(count, max_level);
-        q.out_a = out + 3 * start;
-        q.out_b = other_out + 3 * start;
+        q.out_a = out + start;
+        q.out_b = other_out + start;
+        q.plane = plane;
         q.left = left;
         kernel(q);
         for (std::size_t k = 0; k < q.left_count; ++k) {
             const std::size_t i = start + left[k];
-            sample_pair<3>(m_levels,
-                           other.m_levels,
-                           points.uv(i),
-                           level_pair(lod[i], count, max_level),
-                           out + 3 * i,
-                           other_out + 3 * i);
+            float a[3], b[3];
+            sample_pair<3>(
+                m_levels, other.m_levels, points.uv(i), level_pair(lod[i], count, max_level), a, b);
+            put_planes(a, 3, out, plane, i);
+            put_planes(b, 3, other_out, plane, i);
         }
     }
     return true;
@@ -268,14 +280,19 @@ bool MipTexture::sample_trilinear_pairs_in_lanes(const MipTexture& other, std::s
 TDF_SIMD_CLONES
 void MipTexture::sample_trilinear_many(std::size_t n, const float* covered, const UvLanes& points,
                                        float uv_scale, float lod_offset, float* lod, float* out,
-                                       int max_level) const {
+                                       std::size_t plane, int max_level) const {
+    TDF_CHECK(plane >= n);
     const float w = float(width()), h = float(height());
     for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(points.duv_dx(i), points.duv_dy(i), w, h);
     for (std::size_t i = 0; i < n; ++i)
         if (covered[i] > 0.f) lod[i] = lod_of_major(lod[i]) + lod_offset;
     const std::size_t c = std::size_t(channels());
-    for (std::size_t i = 0; i < n; ++i)
-        if (covered[i] > 0.f) trilinear_at(m_levels, points.uv(i) * uv_scale, lod[i], out + c * i, max_level);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!(covered[i] > 0.f)) continue;
+        float texel[kMaxTextureChannels];
+        trilinear_at(m_levels, points.uv(i) * uv_scale, lod[i], texel, max_level);
+        put_planes(texel, c, out, plane, i);
+    }
 }
 
 namespace {

@@ -31,8 +31,9 @@ struct PairLookups {
     const float* lod = nullptr;  ///< n: each covered point's LOD, not yet clamped
     const PairLevel* levels = nullptr;
     int top = 0;                    ///< the highest level a lookup may read (max_level applied)
-    float* out_a = nullptr;         ///< 3n
-    float* out_b = nullptr;         ///< 3n
+    float* out_a = nullptr;         ///< channel k of point i at out_a[k * plane + i]
+    float* out_b = nullptr;         ///< likewise
+    std::size_t plane = 0;
     std::uint32_t* left = nullptr;  ///< n of room: the covered points left to the scalar code
     std::size_t left_count = 0;
 };

@@ -13,9 +13,9 @@ struct Avx2 {
     using F = __m256;
     using I = __m256i;
     using M = __m256;  // all ones in a lane that is set
-    static F load(const float* p) { return _mm256_load_ps(p); }
-    static void store(float* p, F x) { _mm256_store_ps(p, x); }
+    static void store_lanes(float* p, M m, F x) { _mm256_maskstore_ps(p, _mm256_castps_si256(m), x); }
     static void storei(int* p, I x) { _mm256_store_si256(reinterpret_cast<__m256i*>(p), x); }
+    static F loadu(const float* p) { return _mm256_loadu_ps(p); }
     static F set(float x) { return _mm256_set1_ps(x); }
     static I seti(int x) { return _mm256_set1_epi32(x); }
     static F add(F a, F b) { return _mm256_add_ps(a, b); }

@@ -13,9 +13,9 @@ struct Avx512 {
     using F = __m512;
     using I = __m512i;
     using M = __mmask16;
-    static F load(const float* p) { return _mm512_load_ps(p); }
-    static void store(float* p, F x) { _mm512_store_ps(p, x); }
+    static void store_lanes(float* p, M m, F x) { _mm512_mask_storeu_ps(p, m, x); }
     static void storei(int* p, I x) { _mm512_store_si512(p, x); }
+    static F loadu(const float* p) { return _mm512_loadu_ps(p); }
     static F set(float x) { return _mm512_set1_ps(x); }
     static I seti(int x) { return _mm512_set1_epi32(x); }
     static F add(F a, F b) { return _mm512_add_ps(a, b); }

@@ -55,29 +55,31 @@ void sample_pairs(PairLookups& q) {
     using F = typename V::F;
     using I = typename V::I;
     constexpr int N = V::kLanes;
-    alignas(64) float covered[N], lod[N], u[N], v[N], out[6][N];
+    alignas(64) float covered[N], lod[N], u[N], v[N];
     alignas(64) int l0s[N];
     const F top = V::set(float(q.top));
     for (std::size_t i0 = 0; i0 < q.n; i0 += N) {
         const int count = q.n - i0 < std::size_t(N) ? int(q.n - i0) : N;
-        for (int j = 0; j < N; ++j) {
-            const bool in = j < count;
-            covered[j] = in ? q.covered[i0 + std::size_t(j)] : 0.f;
-            lod[j] = in ? q.lod[i0 + std::size_t(j)] : 0.f;
-            u[j] = in ? q.u[i0 + std::size_t(j)] : 0.f;
-            v[j] = in ? q.v[i0 + std::size_t(j)] : 0.f;
+        const float *in_covered = q.covered + i0, *in_lod = q.lod + i0, *in_u = q.u + i0, *in_v = q.v + i0;
+        if (count < N) {  // the last group: copied, zeros beyond the end
+            for (int j = 0; j < N; ++j) {
+                const bool in = j < count;
+                covered[j] = in ? in_covered[j] : 0.f, lod[j] = in ? in_lod[j] : 0.f;
+                u[j] = in ? in_u[j] : 0.f, v[j] = in ? in_v[j] : 0.f;
+            }
+            in_covered = covered, in_lod = lod, in_u = u, in_v = v;
         }
-        const auto active = V::gt(V::load(covered), V::set(0.f));
+        const auto active = V::gt(V::loadu(in_covered), V::set(0.f));
         if (!V::any(active)) continue;
         // level_pair: !(lod > 0) -> 0 (NaN too), at most top, then its integer part and fraction.
-        F l = V::load(lod);
+        F l = V::loadu(in_lod);
         l = V::select(V::gt(l, V::set(0.f)), l, V::set(0.f));
         l = V::min(l, top);
         const I l0 = V::cvtt(l);
         const F frac = V::sub(l, V::cvt(l0));
         V::storei(l0s, l0);
         const auto blends_next = V::mask_and(V::gt(frac, V::set(0.f)), V::lti(l0, V::seti(q.top)));
-        const F fu = V::load(u), fv = V::load(v);
+        const F fu = V::loadu(in_u), fv = V::loadu(in_v);
         // The lanes one level at a time (a group that crosses a LOD contour reads two levels).
         auto todo = active;
         auto left = V::none();
@@ -101,16 +103,8 @@ void sample_pairs(PairLookups& q) {
                 continue;
             }
             for (int k = 0; k < 3; ++k) {
-                V::store(out[k], a[k]);
-                V::store(out[3 + k], b[k]);
-            }
-            const unsigned bits = V::bits(lanes);
-            for (int j = 0; j < count; ++j) {
-                if (!(bits >> j & 1u)) continue;
-                float* pa = q.out_a + 3 * (i0 + std::size_t(j));
-                float* pb = q.out_b + 3 * (i0 + std::size_t(j));
-                pa[0] = out[0][j], pa[1] = out[1][j], pa[2] = out[2][j];
-                pb[0] = out[3][j], pb[1] = out[4][j], pb[2] = out[5][j];
+                V::store_lanes(q.out_a + std::size_t(k) * q.plane + i0, lanes, a[k]);
+                V::store_lanes(q.out_b + std::size_t(k) * q.plane + i0, lanes, b[k]);
             }
         }
         const unsigned left_bits = V::bits(left);

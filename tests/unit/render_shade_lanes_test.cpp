@@ -42,7 +42,7 @@ TEST(ShadeLanes, EqualTheScalarShadingBitForBit) {
         g.tx[i] = t.x, g.ty[i] = t.y, g.tz[i] = t.z;
         g.w[i] = i % 2 ? 1.f : -1.f;
         g.qx[i] = q.x, g.qy[i] = q.y, g.qz[i] = q.z;
-        l.px[i] = p.x, l.py[i] = p.y, l.pz[i] = p.z;
+        l.p[0][i] = p.x, l.p[1][i] = p.y, l.p[2][i] = p.z;
     }
     ShadeConstants c;
     c.view = {safe_normalize({1, 0.2f, 0}), safe_normalize({-0.2f, 1, 0.1f}), safe_normalize({0, -0.1f, 1})};
@@ -54,7 +54,7 @@ TEST(ShadeLanes, EqualTheScalarShadingBitForBit) {
             c.ambient = training ? 0.5f : 0.1f;
             shade_lanes(g, l, c);
             for (int i = 0; i < l.count; ++i) {
-                Vec3f p{l.px[i], l.py[i], l.pz[i]};
+                Vec3f p{l.p[0][i], l.p[1][i], l.p[2][i]};
                 if (training) p = safe_normalize(p);
                 const Vec3f raw = shading_normal_unnormalized(
                     {g.tx[i], g.ty[i], g.tz[i]}, {g.nx[i], g.ny[i], g.nz[i]}, g.w[i], p);

@@ -165,17 +165,17 @@ TEST(MipTexture, BatchedPairLookupsEqualTheSingleOnesBitForBit) {
         for (const int max_level : {-1, 2}) {
             const SoaPoints points(uv, dx, dy);
             ta.sample_trilinear_pairs(
-                tb, n, covered.data(), points.lanes(), lod.data(), out_a.data(), out_b.data(), max_level);
+                tb, n, covered.data(), points.lanes(), lod.data(), out_a.data(), out_b.data(), n, max_level);
             std::size_t compared = 0;
             for (std::size_t i = 0; i < n; ++i) {
                 if (!(covered[i] > 0.f)) continue;
                 float want_a[kMaxTextureChannels], want_b[kMaxTextureChannels];
                 ta.sample_trilinear_pair_at(tb, uv[i], ta.level_of_detail(dx[i], dy[i]), want_a, want_b, max_level);
                 for (int k = 0; k < channels; ++k)
-                    ASSERT_EQ(std::memcmp(&want_a[k], &out_a[i * std::size_t(channels) + std::size_t(k)], 4), 0)
+                    ASSERT_EQ(std::memcmp(&want_a[k], &out_a[std::size_t(k) * n + i], 4), 0)
                         << "channels " << channels << " point " << i << " channel " << k;
                 for (int k = 0; k < 3; ++k)
-                    ASSERT_EQ(std::memcmp(&want_b[k], &out_b[i * 3 + std::size_t(k)], 4), 0) << "point " << i;
+                    ASSERT_EQ(std::memcmp(&want_b[k], &out_b[std::size_t(k) * n + i], 4), 0) << "point " << i;
                 ++compared;
             }
             EXPECT_EQ(compared, n - n / 7 - (n % 7 > 3 ? 1 : 0));
@@ -213,22 +213,34 @@ TEST(MipTexture, GatheredPairLookupsEqualTheSingleOnesBitForBit) {
         uv[17] = {1.f, 0.f}, uv[18] = {0.f, 1.f}, uv[19] = {0.9999999f, 1e-7f};  // the edges
         uv[40] = {1.25f, 0.5f}, uv[41] = {0.5f, -0.5f};  // wrap: left to the scalar code
         uv[42] = {std::nanf(""), 0.5f};
-        std::vector<float> out_a(n * 3, -7.f), out_b(n * 3, -7.f);
+        constexpr std::size_t plane = n + 3;  // planes further apart than n
+        std::vector<float> out_a(plane * 3, -7.f), out_b(plane * 3, -7.f);
         for (const int max_level : {-1, 3, 0}) {
             const SoaPoints points(uv, dx, dy);
-            ta.sample_trilinear_pairs(
-                tb, n, covered.data(), points.lanes(), lod.data(), out_a.data(), out_b.data(), max_level);
+            ta.sample_trilinear_pairs(tb,
+                                      n,
+                                      covered.data(),
+                                      points.lanes(),
+                                      lod.data(),
+                                      out_a.data(),
+                                      out_b.data(),
+                                      plane,
+                                      max_level);
             for (std::size_t i = 0; i < n; ++i) {
                 if (!(covered[i] > 0.f)) {
-                    ASSERT_EQ(out_a[3 * i], -7.f) << "uncovered point " << i << " was written";
+                    for (std::size_t k = 0; k < 3; ++k)
+                        ASSERT_TRUE(out_a[k * plane + i] == -7.f && out_b[k * plane + i] == -7.f)
+                            << "uncovered point " << i << " was written";
                     continue;
                 }
                 float want_a[3], want_b[3];
                 ta.sample_trilinear_pair_at(
                     tb, uv[i], ta.level_of_detail(dx[i], dy[i]), want_a, want_b, max_level);
-                ASSERT_EQ(std::memcmp(want_a, &out_a[3 * i], sizeof want_a), 0)
+                const float got_a[3] = {out_a[i], out_a[plane + i], out_a[2 * plane + i]};
+                const float got_b[3] = {out_b[i], out_b[plane + i], out_b[2 * plane + i]};
+                ASSERT_EQ(std::memcmp(want_a, got_a, sizeof want_a), 0)
                     << "size " << size << " max_level " << max_level << " point " << i;
-                ASSERT_EQ(std::memcmp(want_b, &out_b[3 * i], sizeof want_b), 0)
+                ASSERT_EQ(std::memcmp(want_b, got_b, sizeof want_b), 0)
                     << "size " << size << " max_level " << max_level << " point " << i;
             }
         }
@@ -259,15 +271,23 @@ TEST(MipTexture, BatchedLookupsEqualTheSingleOnesBitForBit) {
             for (const int max_level : {-1, 5, 1}) {
                 const float offset = std::log2(uv_scale);
                 const SoaPoints points(uv, dx, dy);
-                tex.sample_trilinear_many(
-                    n, covered.data(), points.lanes(), uv_scale, offset, lod.data(), out.data(), max_level);
+                tex.sample_trilinear_many(n,
+                                          covered.data(),
+                                          points.lanes(),
+                                          uv_scale,
+                                          offset,
+                                          lod.data(),
+                                          out.data(),
+                                          n,
+                                          max_level);
                 for (std::size_t i = 0; i < n; ++i) {
                     if (!(covered[i] > 0.f)) continue;
                     float want[kMaxTextureChannels];
                     tex.sample_trilinear_at(uv[i] * uv_scale, tex.level_of_detail(dx[i], dy[i]) + offset, want, max_level);
                     for (int k = 0; k < channels; ++k)
-                        ASSERT_EQ(std::memcmp(&want[k], &out[i * std::size_t(channels) + std::size_t(k)], 4), 0)
-                            << "channels " << channels << " scale " << uv_scale << " max_level " << max_level << " point " << i;
+                        ASSERT_EQ(std::memcmp(&want[k], &out[std::size_t(k) * n + i], 4), 0)
+                            << "channels " << channels << " scale " << uv_scale << " max_level " << max_level
+                            << " point " << i;
                 }
             }
     }
@@ -278,6 +298,6 @@ TEST(MipTextureDeathTest, BatchedPairLookupsNeedMapsOfOneSize) {
     float covered = 1.f, lod = 0.f, out_a[3], out_b[3];
     const Vec2f uv{0.5f, 0.5f}, d{0.1f, 0.f};
     const SoaPoints points({uv}, {d}, {d});
-    EXPECT_DEATH(a.sample_trilinear_pairs(b, 1, &covered, points.lanes(), &lod, out_a, out_b),
+    EXPECT_DEATH(a.sample_trilinear_pairs(b, 1, &covered, points.lanes(), &lod, out_a, out_b, 1),
                  "internal check failed");
 }

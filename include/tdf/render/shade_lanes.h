@@ -14,15 +14,18 @@ namespace tdf {
 struct ShadeLanes {
     static constexpr int kMax = GBufferLanes::kMax;
     int count = 0;
-    // Input: the sampled tangent-space tactile normal p (not normalised).
-    alignas(64) float px[kMax], py[kMax], pz[kMax];
+    // Inputs, one plane a component (the texture lookups write them so): the sampled
+    // tangent-space tactile normal p (not normalised), and the albedo, which shade_lanes does not
+    // read (the caller's colour of each lane).
+    alignas(64) float p[3][kMax];
+    alignas(64) float albedo[3][kMax];
     // Outputs: the tactile normal as drawn (normalised in training), the shading normal, the
     // view-space normal and the diffuse shade.
     alignas(64) float tnx[kMax], tny[kMax], tnz[kMax];
     alignas(64) float snx[kMax], sny[kMax], snz[kMax];
     alignas(64) float vx[kMax], vy[kMax], vz[kMax];
     alignas(64) float shade[kMax];
-    Vec3f albedo[kMax];  ///< not read by shade_lanes: the caller's albedo of each lane
+    Vec3f albedo_at(int i) const { return {albedo[0][i], albedo[1][i], albedo[2][i]}; }
 };
 
 // What is constant over a frame.

@@ -87,19 +87,21 @@ public:
     void sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, float lod, float* out, float* other_out,
                                   int max_level = -1) const;
     /// sample_trilinear_pair_at for the n points with covered[i] > 0, each at the LOD
-    /// level_of_detail(points.duv_dx(i), points.duv_dy(i)) (bit for bit): point i's texels go to
-    /// out + i * channels() and other_out + i * other.channels(); `lod` is n floats of scratch.
-    /// The whole tile at once lets the LODs' arithmetic vectorise, and two RGB maps are read with
-    /// the CPU's gather instructions where it has them (AVX-512 or AVX2).
+    /// level_of_detail(points.duv_dx(i), points.duv_dy(i)) (bit for bit), written in planes:
+    /// channel k of point i to out[k * plane + i] and other_out[k * plane + i] (plane >= n);
+    /// `lod` is n floats of scratch. Other points' values are left as they are. The whole tile at
+    /// once lets the LODs' arithmetic vectorise, and two RGB maps are read with the CPU's gather
+    /// instructions where it has them (AVX-512 or AVX2).
     void sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered,
                                 const UvLanes& points, float* lod, float* out, float* other_out,
-                                int max_level = -1) const;
+                                std::size_t plane, int max_level = -1) const;
     /// sample_trilinear_at(points.uv(i) * uv_scale, level_of_detail(points.duv_dx(i),
-    /// points.duv_dy(i)) + lod_offset, out + i * channels(), max_level) for the n points with
-    /// covered[i] > 0, bit for bit (a map laid at a UV scale: its LOD moves by log2 of the
-    /// scale); `lod` is n floats of scratch.
+    /// points.duv_dy(i)) + lod_offset, ..., max_level) for the n points with covered[i] > 0, bit
+    /// for bit (a map laid at a UV scale: its LOD moves by log2 of the scale), written in planes
+    /// like sample_trilinear_pairs; `lod` is n floats of scratch.
     void sample_trilinear_many(std::size_t n, const float* covered, const UvLanes& points, float uv_scale,
-                               float lod_offset, float* lod, float* out, int max_level = -1) const;
+                               float lod_offset, float* lod, float* out, std::size_t plane,
+                               int max_level = -1) const;
     /// The texels and weights sample_trilinear_at(uv, lod, out, max_level) blends (same LOD
     /// clamping, same wrap addressing), for optimizers that need the adjoint (texture_gradient.h).
     /// Weights sum to 1.
@@ -115,7 +117,7 @@ private:
     /// the LODs already in `lod`; false when this CPU or build has none.
     bool sample_trilinear_pairs_in_lanes(const MipTexture& other, std::size_t n, const float* covered,
                                          const UvLanes& points, const float* lod, float* out,
-                                         float* other_out, int max_level) const;
+                                         float* other_out, std::size_t plane, int max_level) const;
 
     std::vector<Image> m_levels;
 };
