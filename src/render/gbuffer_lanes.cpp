@@ -104,19 +104,36 @@ TDF_FORCE_INLINE void interpolate_lane(const CornerRows& c, const RayDerivatives
     const float hu = h.u[i], hv = h.v[i], ht = h.t[i];
     const float b1 = hit ? hu : 0.f, b2 = hit ? hv : 0.f, t = hit ? ht : 0.f;
     const Vec3f direction{h.dir_x[i], h.dir_y[i], h.dir_z[i]};
-    const TriangleTerms terms = Uvs ? triangle_terms(corners, rd) : TriangleTerms{};
-    const Hit a = interpolate_hit<Tangents, Uvs>(corners, terms, b1, b2, t, direction, rd);
+    const TriangleTerms terms =
+        Uvs ? triangle_terms(corners.p0, corners.p1, corners.p2, corners.uv0, corners.uv1, corners.uv2, rd)
+            : TriangleTerms{};
     const auto keep = [hit](float value) { return hit ? value : 0.f; };
     out.mask[o] = hit ? 1.f : 0.f;
     out.triangle[o] = hit ? c.triangle[i] : -1;
     out.b1[o] = b1, out.b2[o] = b2, out.depth[o] = t;  // direction has camera-space z = -1, so t = -z_cam
-    out.qx[o] = keep(a.position.x), out.qy[o] = keep(a.position.y), out.qz[o] = keep(a.position.z);
-    out.nx[o] = keep(a.normal.x), out.ny[o] = keep(a.normal.y), out.nz[o] = keep(a.normal.z);
-    out.tx[o] = keep(a.tangent.x), out.ty[o] = keep(a.tangent.y), out.tz[o] = keep(a.tangent.z);
-    out.w[o] = keep(a.handedness);
-    out.u[o] = keep(a.uv.x), out.v[o] = keep(a.uv.y);
-    out.du_dx[o] = keep(a.duv.dx.x), out.dv_dx[o] = keep(a.duv.dx.y);
-    out.du_dy[o] = keep(a.duv.dy.x), out.dv_dy[o] = keep(a.duv.dy.y);
+    interpolate_hit<Tangents, Uvs>(
+        corners,
+        terms,
+        b1,
+        b2,
+        t,
+        direction,
+        rd,
+        [&](Vec3f position,
+            Vec3f normal,
+            Vec3f tangent,
+            float handedness,
+            Vec2f uv,
+            Vec2f duv_dx,
+            Vec2f duv_dy) {
+            out.qx[o] = keep(position.x), out.qy[o] = keep(position.y), out.qz[o] = keep(position.z);
+            out.nx[o] = keep(normal.x), out.ny[o] = keep(normal.y), out.nz[o] = keep(normal.z);
+            out.tx[o] = keep(tangent.x), out.ty[o] = keep(tangent.y), out.tz[o] = keep(tangent.z);
+            out.w[o] = keep(handedness);
+            out.u[o] = keep(uv.x), out.v[o] = keep(uv.y);
+            out.du_dx[o] = keep(duv_dx.x), out.dv_dx[o] = keep(duv_dx.y);
+            out.du_dy[o] = keep(duv_dy.x), out.dv_dy[o] = keep(duv_dy.y);
+        });
 }
 
 template <bool Tangents, bool Uvs>

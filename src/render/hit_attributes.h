@@ -1,8 +1,9 @@
 #pragma once
-// One ray hit's surface attributes from its triangle's corners: what the ray G-buffer holds for a
-// pixel. One implementation for the scalar tracer (trace.cpp: per pixel, a triangle's terms kept
-// while neighbouring rays hit it) and for the tile lanes (gbuffer_lanes.cpp: per lane, in vector
-// form), so both give the same bits.
+// One ray hit's surface attributes from its triangle's corners, per lane: what the renderer's
+// G-buffer lanes hold for a pixel (gbuffer_lanes.cpp, vectorised over a packet). The same
+// formulas as the full-frame G-buffer's scalar loop (trace.cpp's TriangleCache, which keeps a
+// triangle's terms while neighbouring rays hit it); Trace.TileLanesEqualTheFullGBufferBitForBit
+// holds the two to the same bits.
 #include <tdf/core/force_inline.h>
 #include <tdf/core/vec.h>
 #include <tdf/render/gbuffer_lanes.h>
@@ -33,10 +34,11 @@ struct TriangleTerms {
 // Ray differentials (Igehy 1999): the hit point moves on the triangle's plane; the barycentric
 // derivatives follow from the Gram matrix of the edges. (A degenerate triangle's terms are not
 // finite; uv_derivatives() does not use them.)
-TDF_FORCE_INLINE TriangleTerms triangle_terms(const Corners& c, const RayDerivatives& rd) {
+TDF_FORCE_INLINE TriangleTerms triangle_terms(Vec3f p0, Vec3f p1, Vec3f p2, Vec2f uv0, Vec2f uv1, Vec2f uv2,
+                                              const RayDerivatives& rd) {
     TriangleTerms t;
-    t.e1 = c.p1 - c.p0;
-    t.e2 = c.p2 - c.p0;
+    t.e1 = p1 - p0;
+    t.e2 = p2 - p0;
     t.ng = cross(t.e1, t.e2);
     const float det = dot(t.ng, t.ng);  // |e1|^2 |e2|^2 - (e1.e2)^2
     t.planar = det > 0.f;
@@ -45,8 +47,8 @@ TDF_FORCE_INLINE TriangleTerms triangle_terms(const Corners& c, const RayDerivat
     t.a12 = dot(t.e1, t.e2) * inv_det;
     t.a22 = dot(t.e2, t.e2) * inv_det;
     t.min_ng_d_sq = 1e-16f * det;
-    t.du1 = c.uv1 - c.uv0;
-    t.du2 = c.uv2 - c.uv0;
+    t.du1 = uv1 - uv0;
+    t.du2 = uv2 - uv0;
     t.ng_do_dx = dot(t.ng, rd.do_dx);
     t.ng_do_dy = dot(t.ng, rd.do_dy);
     t.ng_dd_dx = dot(t.ng, rd.dd_dx);
@@ -78,40 +80,28 @@ TDF_FORCE_INLINE UvDerivatives uv_derivatives(const TriangleTerms& tt, Vec3f dir
             derivative(rd.do_dy, rd.dd_dy, tt.ng_do_dy, tt.ng_dd_dy)};
 }
 
-// The attributes at barycentrics (b1, b2) of a hit at distance t along `direction`; a mesh
-// without tangents has tangent 0 and handedness +1, one without UVs UV 0 and derivatives 0.
-struct Hit {
-    Vec3f position, normal, tangent;
-    float handedness;
-    Vec2f uv;
-    UvDerivatives duv;
-};
-template <bool Tangents, bool Uvs>
-TDF_FORCE_INLINE Hit interpolate_hit(const Corners& c, const TriangleTerms& tt, float b1, float b2, float t,
-                                     Vec3f direction, const RayDerivatives& rd) {
+// The attributes at barycentrics (b1, b2) of a hit at distance t along `direction`, handed to
+// emit(position, normal, tangent, handedness, uv, duv_dx, duv_dy) (straight into the caller's
+// arrays: a struct returned and copied out costs the scalar loop stalled loads); a mesh without
+// tangents has tangent 0 and handedness +1, one without UVs UV 0 and derivatives 0.
+template <bool Tangents, bool Uvs, typename Emit>
+TDF_FORCE_INLINE void interpolate_hit(const Corners& c, const TriangleTerms& tt, float b1, float b2, float t,
+                                      Vec3f direction, const RayDerivatives& rd, Emit&& emit) {
     const float b0 = 1.f - b1 - b2;
     const Vec3f position = c.p0 * b0 + c.p1 * b1 + c.p2 * b2;
     const Vec3f normal = safe_normalize(c.n0 * b0 + c.n1 * b1 + c.n2 * b2);
-    if constexpr (Tangents && Uvs) {
+    Vec3f tangent;
+    float handedness = 1.f;
+    if constexpr (Tangents) {
         const Vec4f tw = c.t0 * b0 + c.t1 * b1 + c.t2 * b2;
-        return {position,
-                normal,
-                safe_normalize(tw.xyz()),
-                tw.w < 0.f ? -1.f : 1.f,
-                c.uv0 * b0 + c.uv1 * b1 + c.uv2 * b2,
-                uv_derivatives(tt, direction, t, rd)};
-    } else if constexpr (Tangents) {
-        const Vec4f tw = c.t0 * b0 + c.t1 * b1 + c.t2 * b2;
-        return {position, normal, safe_normalize(tw.xyz()), tw.w < 0.f ? -1.f : 1.f, {}, {}};
-    } else if constexpr (Uvs) {
-        return {position,
-                normal,
-                {},
-                1.f,
-                c.uv0 * b0 + c.uv1 * b1 + c.uv2 * b2,
-                uv_derivatives(tt, direction, t, rd)};
+        tangent = safe_normalize(tw.xyz());
+        handedness = tw.w < 0.f ? -1.f : 1.f;
+    }
+    if constexpr (Uvs) {
+        const UvDerivatives d = uv_derivatives(tt, direction, t, rd);
+        emit(position, normal, tangent, handedness, c.uv0 * b0 + c.uv1 * b1 + c.uv2 * b2, d.dx, d.dy);
     } else {
-        return {position, normal, {}, 1.f, {}, {}};
+        emit(position, normal, tangent, handedness, Vec2f{}, Vec2f{}, Vec2f{});
     }
 }
 
