@@ -63,10 +63,6 @@ struct Targets {
     std::array<float*, kPassCount> base{};
     std::array<int, kPassCount> channels{};
     float* coverage = nullptr;
-    float* at(Pass p, std::size_t pixel) const {
-        float* b = base[std::size_t(p)];
-        return b ? b + pixel * std::size_t(channels[std::size_t(p)]) : nullptr;
-    }
 
     // The same passes over a w x h tile in `scratch` (resized when needed, row-major like the
     // images). Shading writes a tile there and flush() copies it out one pass at a time: ten

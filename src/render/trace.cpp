@@ -219,15 +219,15 @@ void check_inputs(const EmbreeScene& scene, const TriangleMesh& mesh, const Came
         throw_error("image size {}x{} is empty (width and height must be positive)", camera.width, camera.height);
 }
 
-// Traces [x0, x1) x [y0, y1) and stores pixel (x, y) at out.index(x - ox, y - oy).
-void trace_region(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0, int x1,
-                  int y1, GBuffer& out, int ox, int oy) {
+// Traces [x0, x1) x [y0, y1) of the image into `out`, the image's size.
+void trace_region(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0,
+                  int x1, int y1, GBuffer& out) {
     RayDerivatives rd;
     camera.ray_derivatives(rd.do_dx, rd.do_dy, rd.dd_dx, rd.dd_dy);
     TriangleCache tc;
     const bool ids_and_depth = out.has_ids_and_depth();
     trace_tile_dispatch(scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
-        const std::size_t i = out.index(x - ox, y - oy);
+        const std::size_t i = out.index(x, y);
         if (packet.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) {
             out.clear_pixel(i);
             return;
@@ -263,13 +263,6 @@ void trace_region(const EmbreeScene& scene, const TriangleMesh& mesh, const Came
 }
 
 }  // namespace
-
-void trace_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0, int x1,
-                int y1, GBuffer& tile) {
-    TDF_CHECK(x0 >= 0 && y0 >= 0 && x1 <= camera.width && y1 <= camera.height && x0 < x1 && y0 < y1);
-    if (tile.width != x1 - x0 || tile.height != y1 - y0) tile.resize(x1 - x0, y1 - y0);
-    trace_region(scene, mesh, camera, x0, y0, x1, y1, tile, x0, y0);
-}
 
 void trace_tile_lanes(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0,
                       int y0, int x1, int y1, GBufferLanes& out) {
@@ -312,7 +305,7 @@ void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Cam
     out.resize(camera.width, camera.height, fields);
     parallel_for_tiles(
         camera.width, camera.height, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
-            trace_region(scene, mesh, camera, x0, y0, x1, y1, out, 0, 0);
+            trace_region(scene, mesh, camera, x0, y0, x1, y1, out);
         });
     scene.throw_if_error("tracing");
 }

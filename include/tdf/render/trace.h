@@ -27,15 +27,10 @@ GBuffer trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const 
 /// The same, reusing `out`'s allocations; `fields` chooses what it holds (GBufferFields).
 void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out,
                    GBufferFields fields = GBufferFields::All);
-/// Traces the pixels [x0, x1) x [y0, y1) of the camera's image into `tile`, resized to
-/// (x1 - x0) x (y1 - y0) when needed: tile pixel (0, 0) is image pixel (x0, y0). For renderers
-/// that shade each tile right after tracing it from a small, cache-resident buffer.
-void trace_tile(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0, int y0, int x1,
-                int y1, GBuffer& tile);
-
-/// The same tile into lanes (gbuffer_lanes.h), a packet at a time in packet order: the same
-/// values trace_tile gives each pixel, for a renderer that shades in lanes. The tile holds at most
-/// GBufferLanes::kMax pixels.
+/// Traces the pixels [x0, x1) x [y0, y1) of the camera's image into lanes (gbuffer_lanes.h), a
+/// packet at a time in packet order (lane pixel (0, 0) is image pixel (x0, y0)): the values
+/// trace_gbuffer gives those pixels, for a renderer that shades each tile right after tracing it,
+/// from a small, cache-resident buffer. The tile holds at most GBufferLanes::kMax pixels.
 void trace_tile_lanes(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, int x0,
                       int y0, int x1, int y1, GBufferLanes& out);
 static_assert(kTraceTilePixels == GBufferLanes::kMax, "a trace tile fills the lanes");
