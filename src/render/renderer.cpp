@@ -297,26 +297,22 @@ private:
         const auto set = [](float(*planes)[ShadeLanes::kMax], std::size_t i, Vec3f v) {
             planes[0][i] = v.x, planes[1][i] = v.y, planes[2][i] = v.z;
         };
-        // The planes of a map with 1, 2 or 4+ channels, as RGB (texel_rgb: grey below 3).
-        const auto rgb = [](const float(*planes)[ShadeLanes::kMax], int channels, std::size_t i) {
-            return channels >= 3 ? Vec3f{planes[0][i], planes[1][i], planes[2][i]}
-                                 : Vec3f{planes[0][i], planes[0][i], planes[0][i]};
-        };
         for (std::size_t i = 0; i < n; ++i) {
             if (!(g.mask[i] > 0.f)) {
                 set(l.albedo, i, m_background);
                 set(l.p, i, {0, 0, 1});
                 continue;
             }
+            // Maps of 1, 2 or 4+ channels were looked up into the tile's planes.
             if (pairs) {
-                if (ca != 3) set(l.albedo, i, rgb(tile.albedo, ca, i));
+                if (ca != 3) set(l.albedo, i, texel_rgb(*m_mat.albedo, &tile.albedo[0][i], plane));
             } else {
                 set(l.albedo, i, m_need_albedo ? albedo_at(g, int(i)) : m_background);
             }
             if (!want_tactile)
                 set(l.p, i, {0, 0, 1});
             else if (ct != 3)
-                set(l.p, i, rgb(tile.tactile, ct, i));
+                set(l.p, i, texel_rgb(*m_mat.tactile, &tile.tactile[0][i], plane));
         }
     }
 

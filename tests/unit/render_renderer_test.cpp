@@ -1,3 +1,4 @@
+#include <gtest/gtest.h>
 #include <tdf/core/error.h>
 #include <tdf/core/parallel.h>
 #include <tdf/render/renderer.h>
@@ -5,9 +6,9 @@
 #include <tdf/render/trace.h>
 #include <tdf/scene/procedural_mesh.h>
 
-#include <gtest/gtest.h>
-
+#include <algorithm>
 #include <cmath>
+#include <set>
 
 using namespace tdf;
 
@@ -112,6 +113,53 @@ TEST(Renderer, HandedTangentsFlipTheGreenChannelOnMirroredCharts) {
     compute_tangents(mirrored, TangentMode::Reference);
     const Frame reference = Renderer(mirrored, scene, material).render(cam, Light{}, {Pass::ShadingNormal});
     EXPECT_NEAR(reference.images[0].at(8, 8, 1), -0.6f, 1e-5f);
+}
+
+// Maps with other than three channels (an RGBA albedo, a grey one, an XYZW tactile map) are
+// looked up into the tile's planes and read as RGB there: the frame is bit for bit that of the
+// same maps cut to (or spread over) three channels, which take the lanes' RGB path.
+TEST(Renderer, MapsOfOtherChannelCountsRenderAsTheirRgb) {
+    const TriangleMesh sphere = make_uv_sphere(1.f, 32, 16);
+    const EmbreeScene scene(sphere);
+    constexpr int kSize = 64;
+    Image rgba(kSize, kSize, 4), rgb(kSize, kSize, 3), grey(kSize, kSize, 1), grey3(kSize, kSize, 3);
+    Image xyzw(kSize, kSize, 4), xyz(kSize, kSize, 3);
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            const float s = std::sin(0.3f * float(x)), c = std::cos(0.2f * float(y));
+            const float colour[4] = {0.5f + 0.4f * s, 0.5f + 0.4f * c, 0.3f, 0.1f * float(x % 7)};
+            const Vec3f n = safe_normalize({0.4f * s, 0.4f * c, 1.f});
+            for (int k = 0; k < 4; ++k) {
+                rgba.at(x, y, k) = colour[k];
+                xyzw.at(x, y, k) = k < 3 ? n[k] : 0.7f;
+                if (k < 3) rgb.at(x, y, k) = colour[k], xyz.at(x, y, k) = n[k], grey3.at(x, y, k) = colour[1];
+            }
+            grey.at(x, y, 0) = colour[1];
+        }
+    const MipTexture t_rgba(rgba), t_rgb(rgb), t_grey(grey), t_grey3(grey3), t_xyzw(xyzw), t_xyz(xyz);
+    const Camera cam = Camera::orbit(20, 30, 2.5f, 49.1f, 96, 80);
+    const Light light{Light::Kind::Point, {2, 3, 4}, 0.5f};
+    const std::vector<Pass> passes = {
+        Pass::Albedo, Pass::Lambertian, Pass::TactileNormal, Pass::ShadingNormal};
+    const auto render = [&](const MipTexture& albedo, const MipTexture& tactile) {
+        SurfaceMaterial material;
+        material.albedo_source = SurfaceMaterial::AlbedoSource::Texture;
+        material.albedo = &albedo;
+        material.tactile = &tactile;
+        return Renderer(sphere, scene, material).render(cam, light, passes);
+    };
+    const auto expect_same = [&](const Frame& a, const Frame& b, const char* what) {
+        ASSERT_EQ(a.images.size(), b.images.size());
+        for (std::size_t k = 0; k < a.images.size(); ++k)
+            ASSERT_TRUE(a.images[k].values() == b.images[k].values()) << what << ", pass " << k;
+    };
+    const Frame reference = render(t_rgb, t_xyz);
+    expect_same(render(t_rgba, t_xyz), reference, "RGBA albedo");
+    expect_same(render(t_rgb, t_xyzw), reference, "XYZW tactile map");
+    expect_same(render(t_grey, t_xyz), render(t_grey3, t_xyz), "grey albedo");
+    // The maps were read: the albedo pass holds more than the background and a constant.
+    const auto& albedo = reference.find(Pass::Albedo)->values();
+    EXPECT_GT(std::set<float>(albedo.begin(), albedo.end()).size(), 100u);
 }
 
 TEST(Renderer, BadInputIsAnError) {

@@ -7,9 +7,11 @@
 
 namespace tdf {
 
-/// A texel's first three channels as RGB, or grey for 1-2 channel textures.
-inline Vec3f texel_rgb(const MipTexture& texture, const float* texel) {
-    return texture.channels() >= 3 ? Vec3f{texel[0], texel[1], texel[2]} : Vec3f{texel[0], texel[0], texel[0]};
+/// A texel's first three channels as RGB, or grey for 1-2 channel textures; channel k at
+/// texel[k * stride] (stride > 1: a texel of lookups written in planes).
+inline Vec3f texel_rgb(const MipTexture& texture, const float* texel, std::size_t stride = 1) {
+    return texture.channels() >= 3 ? Vec3f{texel[0], texel[stride], texel[2 * stride]}
+                                   : Vec3f{texel[0], texel[0], texel[0]};
 }
 
 /// The mesh's vertex colour interpolated on `triangle` at barycentrics b = (b1, b2).
