@@ -179,47 +179,13 @@ void MipTexture::sample_trilinear_pair_at(const MipTexture& other, Vec2f uv, flo
         sample_pair<0>(m_levels, other.m_levels, uv, p, out, other_out);
 }
 
-// Compiled for AVX-512, AVX2 and the x86-64 baseline, picked at load time (GCC target_clones):
-// the LODs' arithmetic vectorises, and the footprints use the instruction sets' rounding. Every
-// clone gives sample_trilinear_pair_at's bits: the same operations in the same order, no FMA
-// contraction in this file (src/CMakeLists.txt), and the same glibc log2f.
 namespace {
 // Point i's c channels from `texel` into planes: out[k * plane + i].
 TDF_FORCE_INLINE void put_planes(const float* texel, std::size_t c, float* out, std::size_t plane,
                                  std::size_t i) {
     for (std::size_t k = 0; k < c; ++k) out[k * plane + i] = texel[k];
 }
-}  // namespace
 
-TDF_SIMD_CLONES
-void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered,
-                                        const UvLanes& points, float* lod, float* out, float* other_out,
-                                        std::size_t plane, int max_level) const {
-    TDF_CHECK(other.width() == width() && other.height() == height() && plane >= n);
-    const float w = float(width()), h = float(height());
-    for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(points.duv_dx(i), points.duv_dy(i), w, h);
-    for (std::size_t i = 0; i < n; ++i)
-        if (covered[i] > 0.f) lod[i] = lod_of_major(lod[i]);
-    const int levels = level_count();
-    const std::size_t ca = std::size_t(channels()), cb = std::size_t(other.channels());
-    const bool rgb = ca == 3 && cb == 3;
-    if (rgb &&
-        sample_trilinear_pairs_in_lanes(other, n, covered, points, lod, out, other_out, plane, max_level))
-        return;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (!(covered[i] > 0.f)) continue;
-        const LevelPair p = level_pair(lod[i], levels, max_level);
-        float a[kMaxTextureChannels], b[kMaxTextureChannels];
-        if (rgb)
-            sample_pair<3>(m_levels, other.m_levels, points.uv(i), p, a, b);
-        else
-            sample_pair<0>(m_levels, other.m_levels, points.uv(i), p, a, b);
-        put_planes(a, ca, out, plane, i);
-        put_planes(b, cb, other_out, plane, i);
-    }
-}
-
-namespace {
 // The gather kernel for this CPU (texture_lanes.h), or none: the AVX-512 one where the build's
 // SIMD list has AVX-512 and the CPU too, else the AVX2 one likewise.
 using PairKernel = void (*)(texture_lanes::PairLookups&);
@@ -237,17 +203,44 @@ PairKernel pair_kernel() {
 }
 }  // namespace
 
-bool MipTexture::sample_trilinear_pairs_in_lanes(const MipTexture& other, std::size_t n, const float* covered,
-                                                 const UvLanes& points, const float* lod, float* out,
-                                                 float* other_out, std::size_t plane, int max_level) const {
-    const PairKernel kernel = pair_kernel();
+// Compiled for AVX-512, AVX2 and the x86-64 baseline, picked at load time (GCC target_clones):
+// the LODs' arithmetic vectorises, and the footprints use the instruction sets' rounding. Every
+// clone gives sample_trilinear_pair_at's bits: the same operations in the same order, no FMA
+// contraction in this file (src/CMakeLists.txt), and the same glibc log2f. Two RGB maps go to the
+// gather kernel where there is one; the points it leaves take the scalar path like all others.
+TDF_SIMD_CLONES
+void MipTexture::sample_trilinear_pairs(const MipTexture& other, std::size_t n, const float* covered,
+                                        const UvLanes& points, float* lod, float* out, float* other_out,
+                                        std::size_t plane, int max_level) const {
+    TDF_CHECK(other.width() == width() && other.height() == height() && plane >= n);
+    const float w = float(width()), h = float(height());
+    for (std::size_t i = 0; i < n; ++i) lod[i] = lod_major(points.duv_dx(i), points.duv_dy(i), w, h);
+    for (std::size_t i = 0; i < n; ++i)
+        if (covered[i] > 0.f) lod[i] = lod_of_major(lod[i]);
+    const int levels = level_count();
+    const std::size_t ca = std::size_t(channels()), cb = std::size_t(other.channels());
+    const bool rgb = ca == 3 && cb == 3;
+    const auto scalar = [&](std::size_t i) {
+        const LevelPair p = level_pair(lod[i], levels, max_level);
+        float a[kMaxTextureChannels], b[kMaxTextureChannels];
+        if (rgb)
+            sample_pair<3>(m_levels, other.m_levels, points.uv(i), p, a, b);
+        else
+            sample_pair<0>(m_levels, other.m_levels, points.uv(i), p, a, b);
+        put_planes(a, ca, out, plane, i);
+        put_planes(b, cb, other_out, plane, i);
+    };
     constexpr std::size_t kMaxLevels = 32;  // a 2^31-texel side has 32 levels
-    if (!kernel || m_levels.size() > kMaxLevels) return false;
-    texture_lanes::PairLevel levels[kMaxLevels];
+    const PairKernel kernel = rgb && m_levels.size() <= kMaxLevels ? pair_kernel() : nullptr;
+    if (!kernel) {
+        for (std::size_t i = 0; i < n; ++i)
+            if (covered[i] > 0.f) scalar(i);
+        return;
+    }
+    texture_lanes::PairLevel table[kMaxLevels];
     for (std::size_t k = 0; k < m_levels.size(); ++k)
-        levels[k] = {m_levels[k].data(), other.m_levels[k].data(), m_levels[k].width(), m_levels[k].height()};
-    const int count = level_count();
-    // Chunks of a tile's size: the scalar code's list lives on the stack.
+        table[k] = {m_levels[k].data(), other.m_levels[k].data(), m_levels[k].width(), m_levels[k].height()};
+    // Chunks of a tile's size: the list of points left to the scalar path lives on the stack.
     constexpr std::size_t kChunk = 256;
     std::uint32_t left[kChunk];
     for (std::size_t start = 0; start < n; start += kChunk) {
@@ -257,23 +250,15 @@ bool MipTexture::sample_trilinear_pairs_in_lanes(const MipTexture& other, std::s
         q.u = points.u + start;
         q.v = points.v + start;
         q.lod = lod + start;
-        q.levels = levels;
-        q.top = top_level(count, max_level);
+        q.levels = table;
+        q.top = top_level(levels, max_level);
         q.out_a = out + start;
         q.out_b = other_out + start;
         q.plane = plane;
         q.left = left;
         kernel(q);
-        for (std::size_t k = 0; k < q.left_count; ++k) {
-            const std::size_t i = start + left[k];
-            float a[3], b[3];
-            sample_pair<3>(
-                m_levels, other.m_levels, points.uv(i), level_pair(lod[i], count, max_level), a, b);
-            put_planes(a, 3, out, plane, i);
-            put_planes(b, 3, other_out, plane, i);
-        }
+        for (std::size_t k = 0; k < q.left_count; ++k) scalar(start + left[k]);
     }
-    return true;
 }
 
 // Compiled like sample_trilinear_pairs, for the same reasons; the bits of sample_trilinear_at.

@@ -113,12 +113,6 @@ public:
     float level_of_detail(Vec2f duv_dx, Vec2f duv_dy) const;
 
 private:
-    /// sample_trilinear_pairs of two RGB maps with the CPU's gather instructions (texture_lanes.h),
-    /// the LODs already in `lod`; false when this CPU or build has none.
-    bool sample_trilinear_pairs_in_lanes(const MipTexture& other, std::size_t n, const float* covered,
-                                         const UvLanes& points, const float* lod, float* out,
-                                         float* other_out, std::size_t plane, int max_level) const;
-
     std::vector<Image> m_levels;
 };
 
