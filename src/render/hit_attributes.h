@@ -81,9 +81,9 @@ TDF_FORCE_INLINE UvDerivatives uv_derivatives(const TriangleTerms& tt, Vec3f dir
 }
 
 // The attributes at barycentrics (b1, b2) of a hit at distance t along `direction`, handed to
-// emit(position, normal, tangent, handedness, uv, duv_dx, duv_dy) (straight into the caller's
-// arrays: a struct returned and copied out costs the scalar loop stalled loads); a mesh without
-// tangents has tangent 0 and handedness +1, one without UVs UV 0 and derivatives 0.
+// emit(position, normal, tangent, handedness, uv, duv_dx, duv_dy), which writes them straight into
+// the caller's lanes; a mesh without tangents has tangent 0 and handedness +1, one without UVs UV 0
+// and derivatives 0.
 template <bool Tangents, bool Uvs, typename Emit>
 TDF_FORCE_INLINE void interpolate_hit(const Corners& c, const TriangleTerms& tt, float b1, float b2, float t,
                                       Vec3f direction, const RayDerivatives& rd, Emit&& emit) {

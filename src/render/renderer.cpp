@@ -221,11 +221,8 @@ private:
         if (float* o = pass(Pass::Label))
             each([&](std::size_t p, int i) {
                 Vec3f label;
-                if (mask[i] > 0.f && m_mat.label) {
-                    const UvLanes uv = uv_lanes(g);
-                    PixelLod lod(uv.duv_dx(std::size_t(i)), uv.duv_dy(std::size_t(i)));
-                    label = sample_rgb(*m_mat.label, uv.uv(std::size_t(i)), lod, true, m_tactile_max_level);
-                }
+                if (mask[i] > 0.f && m_mat.label)
+                    label = sample_lane(*m_mat.label, g, i, true, m_tactile_max_level);
                 put3(o + 3 * p, label);
             });
         if (float* o = pass(Pass::Albedo))  // misses hold the background (fill_lanes)
@@ -243,14 +240,20 @@ private:
 
     static UvLanes uv_lanes(const GBufferLanes& g) { return {g.u, g.v, g.du_dx, g.dv_dx, g.du_dy, g.dv_dy}; }
 
+    // One lookup of `tex` at lane i of `g` (sample_rgb), for the maps not looked up a tile at once.
+    static Vec3f sample_lane(const MipTexture& tex, const GBufferLanes& g, int i, bool mipmapped,
+                             int max_level) {
+        const UvLanes uv = uv_lanes(g);
+        const std::size_t k = std::size_t(i);
+        PixelLod lod(uv.duv_dx(k), uv.duv_dy(k));
+        return sample_rgb(tex, uv.uv(k), lod, mipmapped, max_level);
+    }
+
     // The albedo of hit lane i, when the maps are not looked up as a pair.
     Vec3f albedo_at(const GBufferLanes& g, int i) const {
         using Source = SurfaceMaterial::AlbedoSource;
-        if (m_mat.albedo_source == Source::Texture) {
-            const UvLanes uv = uv_lanes(g);
-            PixelLod lod(uv.duv_dx(std::size_t(i)), uv.duv_dy(std::size_t(i)));
-            return sample_rgb(*m_mat.albedo, uv.uv(std::size_t(i)), lod, m_albedo_mipmapped, -1);
-        }
+        if (m_mat.albedo_source == Source::Texture)
+            return sample_lane(*m_mat.albedo, g, i, m_albedo_mipmapped, -1);
         if (m_mat.albedo_source == Source::VertexColors)
             return vertex_color_at(m_mesh, g.triangle[i], {g.b1[i], g.b2[i]});
         return m_mat.albedo_constant;
