@@ -95,7 +95,9 @@ void trace_tile_packets(const EmbreeScene& scene, const Camera& camera, int x0, 
         }
 }
 
-// The same a packet at a time: on_packet(bx, by, valid, rayhit).
+// The same a packet at a time: on_packet(bx, by, valid, rayhit). (trace_tile_packets keeps its
+// own loop: written as this one with the per-lane loop in the callback, the full-frame G-buffer
+// measured 8-15 % slower, BM_GBuffer 23.5-24.7 against 21.3-22.3 ms in five alternating rounds.)
 template <int N, typename OnPacket>
 void trace_packets(const EmbreeScene& scene, const Camera& camera, int x0, int y0, int x1, int y1,
                    OnPacket&& on_packet) {
