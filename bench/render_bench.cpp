@@ -3,7 +3,8 @@
 // AVX-512, 8-wide otherwise, chosen at run time). Scene: a 100k-triangle UV sphere with a 1024^2
 // albedo and tactile map, seen from radius 2.5 (about 72% of the rays hit). The ray and raster
 // producers and their full renders run on the same scene and camera in one run, plus the
-// parts of the frame: the G-buffer alone, and the two trilinear lookups per hit pixel alone.
+// parts of the frame: the G-buffer alone (full frame, and in the renderer's tiles), and the two
+// trilinear lookups per hit pixel alone.
 // `bench/run.sh` prints every benchmark's ratio to BM_Baseline_EmbreePackets.
 #include <benchmark/benchmark.h>
 #include <tdf/core/parallel.h>
@@ -91,6 +92,23 @@ void BM_GBuffer(benchmark::State& state) {
         trace_gbuffer(s.scene, s.mesh, s.camera, g);
         benchmark::DoNotOptimize(g.mask.data());
     }
+    set_rays(state);
+}
+
+// The renderer's G-buffer stage alone: every tile traced into the cache-resident lanes the
+// renderer shades from (trace_tile_lanes: the same hits, interpolation and ray differentials as
+// trace_gbuffer), nothing written to full-frame arrays. BM_GBuffer above is the full-frame
+// G-buffer the trainer and the evaluation read (80 bytes a pixel written to eleven arrays).
+void BM_GBufferTiles(benchmark::State& state) {
+    const BenchScene& s = BenchScene::get();
+    ThreadLimit limit(int(state.range(0)));
+    for (auto _ : state)
+        parallel_for_tiles(
+            kSize, kSize, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
+                static thread_local GBufferLanes lanes;  // per thread, as the renderer keeps it
+                trace_tile_lanes(s.scene, s.mesh, s.camera, x0, y0, x1, y1, lanes);
+                benchmark::DoNotOptimize(lanes.mask);
+            });
     set_rays(state);
 }
 
@@ -190,6 +208,7 @@ void BM_Render_LambertianOnly(benchmark::State& state) {
 TDF_RENDER_BENCH(BM_Baseline_EmbreePackets);
 TDF_RENDER_BENCH(BM_EmbreeSingleRays);
 TDF_RENDER_BENCH(BM_GBuffer);
+TDF_RENDER_BENCH(BM_GBufferTiles);
 TDF_RENDER_BENCH(BM_Raster_Visibility);
 TDF_RENDER_BENCH(BM_Raster_GBuffer);
 TDF_RENDER_BENCH(BM_Part_TwoTrilinearLookups);

@@ -1,19 +1,19 @@
 #include <tdf/core/error.h>
+#include <tdf/core/image_ops.h>
 #include <tdf/core/parallel.h>
-#include <tdf/core/streaming_copy.h>
 #include <tdf/render/material_sampling.h>
 #include <tdf/render/raster.h>
 #include <tdf/render/renderer.h>
-#include <tdf/core/image_ops.h>
+#include <tdf/render/shade_lanes.h>
 #include <tdf/render/shading.h>
+#include <tdf/render/stream_lanes.h>
 #include <tdf/render/trace.h>
 #include <tdf/scene/view_sampler.h>
-
-#include <tdf/render/shade_lanes.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 
 namespace tdf {
 
@@ -57,48 +57,11 @@ Renderer::Renderer(const TriangleMesh& mesh, const EmbreeScene& scene, const Sur
 
 namespace {
 
-// Per-pass output pointers, nullptr for passes not requested: the pixel loop writes straight
-// into the images without lookups or allocation.
+// The frame's images by pass, nullptr for passes not requested: the choice of passes is made
+// once a tile, without lookups or allocation.
 struct Targets {
     std::array<float*, kPassCount> base{};
-    std::array<int, kPassCount> channels{};
     float* coverage = nullptr;
-
-    // The same passes over a w x h tile in `scratch` (resized when needed, row-major like the
-    // images). Shading writes a tile there and flush() copies it out one pass at a time: ten
-    // interleaved streams into ten full-size images evict each other (the images lie at equal
-    // offsets modulo the page size), one copy per pass does not.
-    Targets tile(std::vector<float>& scratch, std::size_t pixels) const {
-        std::size_t size = pixels;  // coverage
-        for (std::size_t p = 0; p < kPassCount; ++p)
-            if (base[p]) size += pixels * std::size_t(channels[p]);
-        if (scratch.size() < size) scratch.resize(size);
-        Targets t = *this;
-        float* next = scratch.data();
-        t.coverage = next;
-        next += pixels;
-        for (std::size_t p = 0; p < kPassCount; ++p)
-            if (base[p]) {
-                t.base[p] = next;
-                next += pixels * std::size_t(channels[p]);
-            }
-        return t;
-    }
-
-    // Copies tile `t` (w x h, pixel (0, 0) at image pixel (x0, y0)) into these images. The frame
-    // is not read again while it is rendered, so the rows bypass the cache (copy_streaming).
-    void flush(const Targets& t, int image_width, int x0, int y0, int w, int h) const {
-        const auto copy = [&](float* image, const float* tile, std::size_t c) {
-            for (int r = 0; r < h; ++r)
-                copy_streaming(tile + std::size_t(r) * std::size_t(w) * c,
-                               std::size_t(w) * c,
-                               image + (std::size_t(y0 + r) * std::size_t(image_width) + std::size_t(x0)) * c);
-        };
-        copy(coverage, t.coverage, 1);
-        for (std::size_t p = 0; p < kPassCount; ++p)
-            if (base[p]) copy(base[p], t.base[p], std::size_t(channels[p]));
-        streaming_fence();
-    }
 };
 
 inline void put3(float* out, Vec3f v) {
@@ -158,6 +121,8 @@ public:
                         targets.base[std::size_t(Pass::Lambertian)]),
           m_tactile_scale(material.tactile_layout.uv_scale),
           m_tactile_lod_offset(std::log2(m_tactile_scale)),
+          m_targets(targets),
+          m_image_width(camera.width),
           m_paired_maps(m_training && material.albedo_source == SurfaceMaterial::AlbedoSource::Texture &&
                         material.tactile && m_tactile_scale == 1.f &&
                         material.albedo->width() == material.tactile->width() &&
@@ -169,73 +134,68 @@ public:
         m_lane_constants.ambient = light.ambient;
     }
 
-    // Shades G-buffer tile `g` into `out`, targets of the tile's size (Targets::tile): the texture
-    // lookups for the whole tile, the shading arithmetic over the whole tile at once
+    // Shades G-buffer tile `g`, whose pixel (0, 0) is image pixel (x0, y0), into the frame: the
+    // texture lookups for the whole tile, the shading arithmetic over the whole tile at once
     // (shade_lanes), then the passes.
-    void shade(const GBufferLanes& g, const Targets& out) const {
+    void shade(const GBufferLanes& g, int x0, int y0) const {
         static thread_local ShadeLanes lanes;  // per thread, reused: no allocation per tile
         fill_lanes(g, lanes);
         if (m_need_frame) shade_lanes(g, lanes, m_lane_constants);
-        write_passes(g, lanes, out);
+        write_passes(g, lanes, x0, y0);
+        streaming_fence();
     }
 
 private:
-    // The passes one at a time over the whole tile: the choice of passes is made once a tile, not
-    // once a pixel. Lane i goes to tile pixel g.pixel[i] (lanes outside the image are skipped).
-    // Background pixels get the G-buffer's zeros, and the background colour where it is
-    // composited.
-    void write_passes(const GBufferLanes& g, const ShadeLanes& l, const Targets& out) const {
+    // The passes one at a time over the whole tile, from the lanes straight into the frame's
+    // images (stream_lanes.h); the passes that are not a plane of the lanes as they are (the
+    // flipped v, the label and lit colours) are made in lanes first. Background pixels get the
+    // G-buffer's zeros, and the background colour where it is composited.
+    void write_passes(const GBufferLanes& g, const ShadeLanes& l, int x0, int y0) const {
+        static thread_local TilePixelLanes layout;
+        static thread_local struct {
+            alignas(64) float v_flipped[ShadeLanes::kMax];
+            alignas(64) float colour[3][ShadeLanes::kMax];
+        } extra;
+        layout.build(g);
         const int n = g.count;
-        const int* pixel = g.pixel;
         const float* mask = g.mask;
-        const auto pass = [&](Pass p) { return out.base[std::size_t(p)]; };
-        const auto each = [&](auto&& write) {
-            for (int i = 0; i < n; ++i)
-                if (pixel[i] >= 0) write(std::size_t(pixel[i]), i);
+        const auto pass = [&](Pass p) { return m_targets.base[std::size_t(p)]; };
+        const auto put = [&](float* image, std::initializer_list<const float*> planes, const float* hits) {
+            stream_lanes(layout, planes.begin(), int(planes.size()), hits, image, m_image_width, x0, y0);
         };
-        const auto copy1 = [&](const float* from, float* to) {
-            each([&](std::size_t o, int i) { to[o] = from[i]; });
-        };
-        const auto copy3 = [&](const float* x, const float* y, const float* z, float* to) {
-            each([&](std::size_t o, int i) { to[3 * o] = x[i], to[3 * o + 1] = y[i], to[3 * o + 2] = z[i]; });
-        };
-        // Lanes whose pixel missed hold whatever shading computed from zeros: write zeros there.
-        const auto hits3 = [&](const float* x, const float* y, const float* z, float* to) {
-            each([&](std::size_t o, int i) {
-                const bool hit = mask[i] > 0.f;
-                to[3 * o] = hit ? x[i] : 0.f, to[3 * o + 1] = hit ? y[i] : 0.f,
-                       to[3 * o + 2] = hit ? z[i] : 0.f;
-            });
-        };
-        copy1(mask, out.coverage);
-        if (float* o = pass(Pass::Mask)) copy1(mask, o);
-        if (float* o = pass(Pass::Depth)) copy1(g.depth, o);
-        if (float* o = pass(Pass::Normal)) copy3(g.nx, g.ny, g.nz, o);
-        if (float* o = pass(Pass::Tangent)) copy3(g.tx, g.ty, g.tz, o);
-        if (float* o = pass(Pass::Uv))
-            each([&](std::size_t p, int i) {
-                const bool hit = mask[i] > 0.f;
-                o[2 * p] = hit ? g.u[i] : 0.f;
-                o[2 * p + 1] = hit ? 1.f - g.v[i] : 0.f;  // the reference's v' (spec 3.9)
-            });
-        if (float* o = pass(Pass::Label))
-            each([&](std::size_t p, int i) {
+        put(m_targets.coverage, {mask}, nullptr);
+        if (float* o = pass(Pass::Mask)) put(o, {mask}, nullptr);
+        if (float* o = pass(Pass::Depth)) put(o, {g.depth}, nullptr);
+        if (float* o = pass(Pass::Normal)) put(o, {g.nx, g.ny, g.nz}, nullptr);
+        if (float* o = pass(Pass::Tangent)) put(o, {g.tx, g.ty, g.tz}, nullptr);
+        if (float* o = pass(Pass::Uv)) {
+            for (int i = 0; i < n; ++i) extra.v_flipped[i] = 1.f - g.v[i];  // the reference's v' (spec 3.9)
+            put(o, {g.u, extra.v_flipped}, mask);
+        }
+        if (float* o = pass(Pass::Label)) {
+            for (int i = 0; i < n; ++i) {
                 Vec3f label;
-                if (mask[i] > 0.f && m_mat.label)
+                if (g.pixel[i] >= 0 && mask[i] > 0.f && m_mat.label)
                     label = sample_lane(*m_mat.label, g, i, true, m_tactile_max_level);
-                put3(o + 3 * p, label);
-            });
+                extra.colour[0][i] = label.x, extra.colour[1][i] = label.y, extra.colour[2][i] = label.z;
+            }
+            put(o, {extra.colour[0], extra.colour[1], extra.colour[2]}, nullptr);
+        }
         if (float* o = pass(Pass::Albedo))  // misses hold the background (fill_lanes)
-            copy3(l.albedo[0], l.albedo[1], l.albedo[2], o);
+            put(o, {l.albedo[0], l.albedo[1], l.albedo[2]}, nullptr);
         if (!m_need_frame) return;
-        if (float* o = pass(Pass::TactileNormal)) hits3(l.tnx, l.tny, l.tnz, o);
-        if (float* o = pass(Pass::ShadingNormal)) hits3(l.snx, l.sny, l.snz, o);
-        if (float* o = pass(Pass::ShadingNormalViewspace)) hits3(l.vx, l.vy, l.vz, o);
-        if (float* o = pass(Pass::Lambertian))
-            each([&](std::size_t p, int i) {
-                put3(o + 3 * p,
-                     mask[i] > 0.f ? lit_color(l.albedo_at(i), l.shade[i], m_color_space) : m_background);
-            });
+        // Lanes that missed hold what shading made of zeros: masked to zeros.
+        if (float* o = pass(Pass::TactileNormal)) put(o, {l.tnx, l.tny, l.tnz}, mask);
+        if (float* o = pass(Pass::ShadingNormal)) put(o, {l.snx, l.sny, l.snz}, mask);
+        if (float* o = pass(Pass::ShadingNormalViewspace)) put(o, {l.vx, l.vy, l.vz}, mask);
+        if (float* o = pass(Pass::Lambertian)) {
+            for (int i = 0; i < n; ++i) {
+                const Vec3f c =
+                    mask[i] > 0.f ? lit_color(l.albedo_at(i), l.shade[i], m_color_space) : m_background;
+                extra.colour[0][i] = c.x, extra.colour[1][i] = c.y, extra.colour[2][i] = c.z;
+            }
+            put(o, {extra.colour[0], extra.colour[1], extra.colour[2]}, nullptr);
+        }
     }
 
     static UvLanes uv_lanes(const GBufferLanes& g) { return {g.u, g.v, g.du_dx, g.dv_dx, g.du_dy, g.dv_dy}; }
@@ -330,6 +290,8 @@ private:
     bool m_need_albedo;
     float m_tactile_scale;
     float m_tactile_lod_offset;
+    Targets m_targets;
+    int m_image_width;
     bool m_paired_maps;
     ShadeConstants m_lane_constants;
 };
@@ -361,7 +323,6 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
         if (targets.base[std::size_t(p)]) throw_error("pass '{}' is requested twice", pass_name(p));
         if (!reuse) frame.images.emplace_back(camera.width, camera.height, pass_channels(p));
         targets.base[std::size_t(p)] = frame.images[k].data();
-        targets.channels[std::size_t(p)] = pass_channels(p);
     }
     targets.coverage = frame.coverage.data();
     const TileShader shader(m_mesh, m_material, m_settings, camera, light, targets);
@@ -395,11 +356,8 @@ void Renderer::render(const Camera& camera, const Light& light, const std::vecto
         camera.width, camera.height, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
             // One G-buffer tile per thread, reused across tiles and frames: stays in cache.
             static thread_local GBufferLanes g;
-            static thread_local std::vector<float> scratch;
             produce_tile(x0, y0, x1, y1, g);
-            const Targets tile = targets.tile(scratch, std::size_t(g.width) * std::size_t(g.height));
-            shader.shade(g, tile);
-            targets.flush(tile, camera.width, x0, y0, g.width, g.height);
+            shader.shade(g, x0, y0);
             if (antialias)
                 for (int i = 0; i < g.count; ++i) {
                     if (g.pixel[i] < 0) continue;
