@@ -163,6 +163,14 @@ private:
         const auto put = [&](float* image, std::initializer_list<const float*> planes, const float* hits) {
             stream_lanes(layout, planes.begin(), int(planes.size()), hits, image, m_image_width, x0, y0);
         };
+        // A pass of one colour a lane, made in lanes first.
+        const auto put_colours = [&](float* image, auto&& colour_of_lane) {
+            for (int i = 0; i < n; ++i) {
+                const Vec3f c = colour_of_lane(i);
+                extra.colour[0][i] = c.x, extra.colour[1][i] = c.y, extra.colour[2][i] = c.z;
+            }
+            put(image, {extra.colour[0], extra.colour[1], extra.colour[2]}, nullptr);
+        };
         put(m_targets.coverage, {mask}, nullptr);
         if (float* o = pass(Pass::Mask)) put(o, {mask}, nullptr);
         if (float* o = pass(Pass::Depth)) put(o, {g.depth}, nullptr);
@@ -172,15 +180,12 @@ private:
             for (int i = 0; i < n; ++i) extra.v_flipped[i] = 1.f - g.v[i];  // the reference's v' (spec 3.9)
             put(o, {g.u, extra.v_flipped}, mask);
         }
-        if (float* o = pass(Pass::Label)) {
-            for (int i = 0; i < n; ++i) {
-                Vec3f label;
-                if (g.pixel[i] >= 0 && mask[i] > 0.f && m_mat.label)
-                    label = sample_lane(*m_mat.label, g, i, true, m_tactile_max_level);
-                extra.colour[0][i] = label.x, extra.colour[1][i] = label.y, extra.colour[2][i] = label.z;
-            }
-            put(o, {extra.colour[0], extra.colour[1], extra.colour[2]}, nullptr);
-        }
+        if (float* o = pass(Pass::Label))
+            put_colours(o, [&](int i) {
+                return g.pixel[i] >= 0 && mask[i] > 0.f && m_mat.label
+                           ? sample_lane(*m_mat.label, g, i, true, m_tactile_max_level)
+                           : Vec3f{};
+            });
         if (float* o = pass(Pass::Albedo))  // misses hold the background (fill_lanes)
             put(o, {l.albedo[0], l.albedo[1], l.albedo[2]}, nullptr);
         if (!m_need_frame) return;
@@ -188,14 +193,10 @@ private:
         if (float* o = pass(Pass::TactileNormal)) put(o, {l.tnx, l.tny, l.tnz}, mask);
         if (float* o = pass(Pass::ShadingNormal)) put(o, {l.snx, l.sny, l.snz}, mask);
         if (float* o = pass(Pass::ShadingNormalViewspace)) put(o, {l.vx, l.vy, l.vz}, mask);
-        if (float* o = pass(Pass::Lambertian)) {
-            for (int i = 0; i < n; ++i) {
-                const Vec3f c =
-                    mask[i] > 0.f ? lit_color(l.albedo_at(i), l.shade[i], m_color_space) : m_background;
-                extra.colour[0][i] = c.x, extra.colour[1][i] = c.y, extra.colour[2][i] = c.z;
-            }
-            put(o, {extra.colour[0], extra.colour[1], extra.colour[2]}, nullptr);
-        }
+        if (float* o = pass(Pass::Lambertian))
+            put_colours(o, [&](int i) {
+                return mask[i] > 0.f ? lit_color(l.albedo_at(i), l.shade[i], m_color_space) : m_background;
+            });
     }
 
     static UvLanes uv_lanes(const GBufferLanes& g) { return {g.u, g.v, g.du_dx, g.dv_dx, g.du_dy, g.dv_dy}; }

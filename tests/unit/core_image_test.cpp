@@ -1,5 +1,6 @@
-// Image's storage: filled in parallel when large (the same values on any thread count), and
-// its allocator's containers keep what they hold when they grow.
+// Image's storage: filled in parallel when large (the same values on any thread count), its
+// allocator's containers keep what they hold when they grow, and large blocks start on a cache
+// line.
 #include <gtest/gtest.h>
 #include <tdf/core/image.h>
 #include <tdf/core/parallel.h>
