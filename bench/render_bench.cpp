@@ -84,21 +84,24 @@ void BM_EmbreeSingleRays(benchmark::State& state) {
     set_rays(state);
 }
 
-void BM_GBuffer(benchmark::State& state) {
+void gbuffer(benchmark::State& state, GBufferFields fields) {
     const BenchScene& s = BenchScene::get();
     ThreadLimit limit(int(state.range(0)));
     GBuffer g;
     for (auto _ : state) {
-        trace_gbuffer(s.scene, s.mesh, s.camera, g);
+        trace_gbuffer(s.scene, s.mesh, s.camera, g, fields);
         benchmark::DoNotOptimize(g.mask.data());
     }
     set_rays(state);
 }
+// The full-frame G-buffer with every attribute (80 bytes a pixel: the evaluation, tests, tools).
+void BM_GBuffer(benchmark::State& state) { gbuffer(state, GBufferFields::All); }
+// The trainer's views: no triangle ids, barycentrics or depth (68 bytes a pixel).
+void BM_GBufferShading(benchmark::State& state) { gbuffer(state, GBufferFields::Shading); }
 
 // The renderer's G-buffer stage alone: every tile traced into the cache-resident lanes the
-// renderer shades from (trace_tile_lanes: the same hits, interpolation and ray differentials as
-// trace_gbuffer), nothing written to full-frame arrays. BM_GBuffer above is the full-frame
-// G-buffer the trainer and the evaluation read (80 bytes a pixel written to eleven arrays).
+// renderer shades from (trace_tile_lanes), nothing written to full-frame arrays. The full-frame
+// G-buffers above are these tiles written out (stream_gbuffer_tile), to eleven or eight arrays.
 void BM_GBufferTiles(benchmark::State& state) {
     const BenchScene& s = BenchScene::get();
     ThreadLimit limit(int(state.range(0)));
@@ -208,6 +211,7 @@ void BM_Render_LambertianOnly(benchmark::State& state) {
 TDF_RENDER_BENCH(BM_Baseline_EmbreePackets);
 TDF_RENDER_BENCH(BM_EmbreeSingleRays);
 TDF_RENDER_BENCH(BM_GBuffer);
+TDF_RENDER_BENCH(BM_GBufferShading);
 TDF_RENDER_BENCH(BM_GBufferTiles);
 TDF_RENDER_BENCH(BM_Raster_Visibility);
 TDF_RENDER_BENCH(BM_Raster_GBuffer);

@@ -1,9 +1,8 @@
 #pragma once
-// One ray hit's surface attributes from its triangle's corners, per lane: what the renderer's
-// G-buffer lanes hold for a pixel (gbuffer_lanes.cpp, vectorised over a packet). The same
-// formulas as the full-frame G-buffer's scalar loop (trace.cpp's TriangleCache, which keeps a
-// triangle's terms while neighbouring rays hit it); Trace.TileLanesEqualTheFullGBufferBitForBit
-// holds the two to the same bits.
+// One ray hit's surface attributes from its triangle's corners, per lane: what the G-buffer lanes
+// hold for a pixel (gbuffer_lanes.cpp, vectorised over a packet), the renderer's tiles and, written
+// out, the full-frame G-buffer (trace_gbuffer). Trace.FullGBufferHoldsThePlainInterpolationOfEachHit
+// checks them against the plain per-pixel formulas.
 #include <tdf/core/force_inline.h>
 #include <tdf/core/vec.h>
 #include <tdf/render/gbuffer_lanes.h>

@@ -1,9 +1,12 @@
 #include <tdf/core/error.h>
+#include <tdf/render/gbuffer.h>
 #include <tdf/render/stream_lanes.h>
 
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <initializer_list>
 
 #if defined(__SSE2__)
 #include <immintrin.h>
@@ -79,7 +82,14 @@ void stream_row(const TilePixelLanes& tile, const float* const* planes, const fl
         for (int px = x; px < std::min(x + 4, tile.width()); ++px) {
             const int l = tile.lane(px, y);
             const bool keep = !Masked || hits[l] > 0.f;
-            for (int k = 0; k < C; ++k) row[std::size_t(px) * C + std::size_t(k)] = keep ? planes[k][l] : 0.f;
+            // Copied as bits: a plane may hold integers (GBuffer::triangle).
+            for (int k = 0; k < C; ++k) {
+                float* to = row + std::size_t(px) * C + std::size_t(k);
+                if (keep)
+                    std::memcpy(to, planes[k] + l, sizeof(float));
+                else
+                    *to = 0.f;
+            }
         }
     }
 }
@@ -110,6 +120,29 @@ void stream_lanes(const TilePixelLanes& tile, const float* const* planes, int ch
         default:
             TDF_CHECK(channels >= 1 && channels <= 3);
     }
+}
+
+void stream_gbuffer_tile(const TilePixelLanes& tile, const GBufferLanes& lanes, GBuffer& out, int x0,
+                         int y0) {
+    static_assert(sizeof(Vec2f) == 2 * sizeof(float) && sizeof(Vec3f) == 3 * sizeof(float), "packed pixels");
+    const auto put = [&](auto* image, std::initializer_list<const float*> planes) {
+        float* const pixels = reinterpret_cast<float*>(image);
+        stream_lanes(tile, planes.begin(), int(planes.size()), nullptr, pixels, out.width, x0, y0);
+    };
+    put(out.mask.data(), {lanes.mask});
+    if (out.has_ids_and_depth()) {
+        // The ids go through as bits (stream_lanes copies words).
+        put(out.triangle.data(), {reinterpret_cast<const float*>(lanes.triangle)});
+        put(out.barycentric.data(), {lanes.b1, lanes.b2});
+        put(out.depth.data(), {lanes.depth});
+    }
+    put(out.position.data(), {lanes.qx, lanes.qy, lanes.qz});
+    put(out.normal.data(), {lanes.nx, lanes.ny, lanes.nz});
+    put(out.tangent.data(), {lanes.tx, lanes.ty, lanes.tz});
+    put(out.handedness.data(), {lanes.w});
+    put(out.uv.data(), {lanes.u, lanes.v});
+    put(out.duv_dx.data(), {lanes.du_dx, lanes.dv_dx});
+    put(out.duv_dy.data(), {lanes.du_dy, lanes.dv_dy});
 }
 
 void streaming_fence() {

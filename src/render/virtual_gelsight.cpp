@@ -176,7 +176,7 @@ SimulatedTouch simulate_touch(const ReliefAsset& asset, const TouchPoint& point,
     touch.height.source = asset.obj_path;
     touch.normals = normals_from_height(touch.height.height, 1.0f / pad.mm_per_pixel);
     touch.preview = gelsight_preview(touch.normals);
-    touch.triangles = g.triangle;
+    touch.triangles.assign(g.triangle.begin(), g.triangle.end());
     return touch;
 }
 

@@ -139,10 +139,10 @@ TEST(Trace, ShadingFieldsEqualTheFullGBuffersAndLeaveOutIdsAndDepth) {
     }
 }
 
-// The renderer's tiles in lanes (trace_tile_lanes: a packet at a time, the per-hit arithmetic
-// vectorised) hold what the full-frame G-buffer holds, bit for bit, every pixel in exactly one
-// lane: with and without tangents and UVs, on tiles cut short by the image's edges (100 x 70 is
-// no multiple of 64 x 4), background included.
+// The full-frame G-buffer is the renderer's tiles in lanes (trace_tile_lanes) written out
+// (stream_gbuffer_tile): every pixel is exactly one lane's and holds its bits, with and without
+// tangents and UVs, on tiles cut short by the image's edges (100 x 70 is no multiple of 64 x 4),
+// background included.
 TEST(Trace, TileLanesEqualTheFullGBufferBitForBit) {
     TriangleMesh full_mesh = make_uv_sphere(1.f, 48, 24);
     TriangleMesh no_tangents = full_mesh;
@@ -198,6 +198,80 @@ TEST(Trace, TileLanesEqualTheFullGBufferBitForBit) {
         for (std::size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << "pixel " << i;
         EXPECT_GT(hits, g.pixel_count() / 4);
         EXPECT_LT(hits, g.pixel_count());
+    }
+}
+
+// Every pixel of the full-frame G-buffer holds the plain per-pixel interpolation of its hit's
+// triangle corners at its barycentrics (written out here in scalar form, independently of the
+// vectorised lanes), background pixels exactly what clear_pixel leaves; a reused G-buffer holding
+// another view's values, on an image whose rows start off the 16-byte grid (67 wide: the
+// writer's scalar path), ends up with the bits of a fresh one.
+TEST(Trace, FullGBufferHoldsThePlainInterpolationOfEachHit) {
+    TriangleMesh sphere = make_uv_sphere(1.f, 48, 24);
+    ASSERT_FALSE(sphere.tangents.empty());
+    ASSERT_TRUE(sphere.has_uvs());
+    // Mirrored corners here and there: the interpolated handedness changes sign within triangles.
+    for (std::size_t k = 0; k < sphere.tangents.size(); k += 3) sphere.tangents[k].w = -1.f;
+    const EmbreeScene scene(sphere);
+    for (const auto& [width, height] : {std::pair{100, 70}, std::pair{67, 45}}) {
+        const Camera cam = Camera::orbit(10, 40, 2.5f, 49.1f, width, height);
+        GBuffer g;
+        trace_gbuffer(scene, sphere, Camera::orbit(200, -30, 3.f, 30.f, 120, 90), g);  // another view first
+        trace_gbuffer(scene, sphere, cam, g);
+        const GBuffer fresh = trace_gbuffer(scene, sphere, cam);
+        ASSERT_EQ(g.pixel_count(), std::size_t(width) * std::size_t(height));
+        ASSERT_EQ(std::memcmp(g.position.data(), fresh.position.data(), g.pixel_count() * sizeof(Vec3f)), 0);
+        ASSERT_EQ(std::memcmp(g.duv_dy.data(), fresh.duv_dy.data(), g.pixel_count() * sizeof(Vec2f)), 0);
+        std::size_t hits = 0, negative = 0;
+        for (std::size_t i = 0; i < g.pixel_count(); ++i) {
+            const int f = g.triangle[i];
+            if (g.mask[i] == 0.f) {
+                ASSERT_EQ(f, -1) << "pixel " << i;
+                for (float z :
+                     {g.barycentric[i].x, g.depth[i], g.position[i].x, g.normal[i].y, g.tangent[i].z})
+                    ASSERT_EQ(z, 0.f) << "pixel " << i;
+                for (float z : {g.handedness[i], g.uv[i].x, g.duv_dx[i].y, g.duv_dy[i].x})
+                    ASSERT_EQ(z, 0.f) << "pixel " << i;
+                continue;
+            }
+            ++hits;
+            ASSERT_EQ(g.mask[i], 1.f);
+            ASSERT_GE(f, 0);
+            ASSERT_LT(std::size_t(f), sphere.triangles.size());
+            const float b1 = g.barycentric[i].x, b2 = g.barycentric[i].y, b0 = 1.f - b1 - b2;
+            const auto mix = [&](const auto& values, const Vec3i& corners) {
+                return values[std::size_t(corners.x)] * b0 + values[std::size_t(corners.y)] * b1 +
+                       values[std::size_t(corners.z)] * b2;
+            };
+            const Vec3i& tri = sphere.triangles[std::size_t(f)];
+            const Vec3i& tt = sphere.tangent_triangles[std::size_t(f)];
+            const Vec3i& ut = sphere.uv_triangles[std::size_t(f)];
+            const Vec3f p = mix(sphere.positions, tri), n = safe_normalize(mix(sphere.normals, tri));
+            const Vec3f t = sphere.tangents[std::size_t(tt.x)].xyz() * b0 +
+                            sphere.tangents[std::size_t(tt.y)].xyz() * b1 +
+                            sphere.tangents[std::size_t(tt.z)].xyz() * b2;
+            const Vec2f uv = mix(sphere.uvs, ut);
+            const float tol = 2e-6f;
+            EXPECT_NEAR(g.position[i].x, p.x, tol);
+            EXPECT_NEAR(g.position[i].y, p.y, tol);
+            EXPECT_NEAR(g.position[i].z, p.z, tol);
+            EXPECT_NEAR(dot(g.normal[i], n), 1.f, tol) << "pixel " << i;
+            EXPECT_NEAR(dot(g.tangent[i], safe_normalize(t)), 1.f, tol) << "pixel " << i;
+            const float w = sphere.tangents[std::size_t(tt.x)].w * b0 +
+                            sphere.tangents[std::size_t(tt.y)].w * b1 +
+                            sphere.tangents[std::size_t(tt.z)].w * b2;
+            if (std::abs(w) > 1e-4f) {
+                ASSERT_EQ(g.handedness[i], w < 0.f ? -1.f : 1.f) << "pixel " << i;
+            }
+            negative += g.handedness[i] < 0.f;
+            EXPECT_NEAR(g.uv[i].x, uv.x, tol);
+            EXPECT_NEAR(g.uv[i].y, uv.y, tol);
+            EXPECT_NEAR(g.depth[i], dot(cam.back, cam.position - p), 1e-5f);  // -z_cam
+        }
+        EXPECT_GT(hits, g.pixel_count() / 4);
+        EXPECT_LT(hits, g.pixel_count());
+        EXPECT_GT(negative, hits / 10);
+        EXPECT_LT(negative, hits - hits / 10);
     }
 }
 

@@ -33,8 +33,9 @@ struct SeamRow {
         mesh.triangles = {{0, 1, 2}, {1, 3, 2}};
         mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 0}, {-1, 1}, {0, 1}};
         mesh.uv_triangles = {{0, 1, 2}, {3, 4, 5}};
-        g.resize(8, 1);
+        g.resize(8, 1);  // contents unspecified until written
         for (int x = 0; x < 8; ++x) {
+            g.clear_pixel(std::size_t(x));
             g.mask[std::size_t(x)] = 1.0f;
             g.depth[std::size_t(x)] = 2.0f;
             g.triangle[std::size_t(x)] = x < 4 ? 0 : 1;

@@ -50,7 +50,7 @@ struct PacketHits {
 };
 
 /// Lanes [first, first + hits.count) of `out` from one packet's hits on `mesh` (the mesh the
-/// traced scene was built from): the same bits as trace_gbuffer gives those pixels. Vectorised
+/// traced scene was built from); trace_gbuffer writes these lanes out. Vectorised
 /// (AVX-512, AVX2 or the baseline, picked at load time). Does not set `pixel`.
 void interpolate_packet(const TriangleMesh& mesh, const RayDerivatives& rd, const PacketHits& hits,
                         GBufferLanes& out, int first);

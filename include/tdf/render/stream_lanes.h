@@ -37,6 +37,11 @@ private:
 void stream_lanes(const TilePixelLanes& tile, const float* const* planes, int channels, const float* hits,
                   float* image, int image_width, int x0, int y0);
 
+/// Writes every field `out` holds (out.fields) of a traced tile into `out`'s full-frame arrays,
+/// the tile's pixel (0, 0) at (x0, y0), with stream_lanes: the full-frame G-buffer the trainer and
+/// the evaluation read, written a cache line at a time. `tile` is built from `lanes`.
+void stream_gbuffer_tile(const TilePixelLanes& tile, const GBufferLanes& lanes, GBuffer& out, int x0, int y0);
+
 /// Orders the streaming stores before any later store (they are weakly ordered).
 void streaming_fence();
 
