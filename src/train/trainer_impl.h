@@ -132,6 +132,29 @@ struct Trainer::Batch {
     std::vector<std::array<float, 4>> scatter_values;      // ... and the values they carry
     std::vector<FieldOutputGrads> texel_grads;
     std::vector<std::uint32_t> fit_texels;  // matching phase: the texels sampled this iteration
+
+    // Room for `pixels` hits in every per-hit array the evaluation uses (`pixels`: the traced
+    // pixels of the half-iteration, an upper bound). Grown to each new largest hit count instead,
+    // an array was copied and its old block left free in the heap, where later blocks fitted or
+    // not depending on how the threads' allocations interleaved: the main job's peak was 582 or
+    // 602 MB from run to run (2026-12-07).
+    void reserve_hits(std::size_t pixels, bool texture_space) {
+        if (hit_pixel.capacity() >= pixels) return;
+        hit_pixel.reserve(pixels);
+        hit_view.reserve(pixels);
+        outputs.reserve(pixels);
+        grads.reserve(pixels);
+        shade.reserve(pixels);
+        if (!texture_space) {
+            points.reserve(pixels);
+            return;
+        }
+        lookup_uv.reserve(pixels);
+        lookup_lod.reserve(pixels);
+        raw_normal.reserve(pixels);
+        target.reserve(pixels);
+        curvature.reserve(pixels);
+    }
 };
 
 // What iteration i computes: the phase table of spec 5.1 (i is the 0-based loop index).

@@ -52,6 +52,9 @@ void Trainer::trace_views(std::size_t first, std::size_t last) {
         trace_gbuffer(*m_target.scene, *m_target.mesh, b.cameras[k], b.gbuffers[k],
                       texture_space() ? GBufferFields::Shading : GBufferFields::All);
     b.point_of.resize(b.gbuffers.size());
+    std::size_t pixels = 0;
+    for (std::size_t k = first; k < last; ++k) pixels += b.gbuffers[k].pixel_count();
+    b.reserve_hits(pixels, texture_space());
     b.points.clear();
     b.patch_hit_count = 0;
     b.hit_pixel.clear();
