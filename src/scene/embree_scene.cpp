@@ -21,7 +21,8 @@ struct EmbreeScene::ErrorSink {
     }
 };
 
-EmbreeScene::EmbreeScene(const TriangleMesh& mesh) : m_errors(std::make_unique<ErrorSink>()) {
+EmbreeScene::EmbreeScene(const TriangleMesh& mesh, PacketWidth width)
+    : m_errors(std::make_unique<ErrorSink>()) {
     if (mesh.triangles.empty() || mesh.positions.empty())
         throw_error("{}: cannot build a ray-tracing scene from an empty mesh",
                     mesh.source_path.empty() ? "mesh" : mesh.source_path);
@@ -29,7 +30,7 @@ EmbreeScene::EmbreeScene(const TriangleMesh& mesh) : m_errors(std::make_unique<E
     if (!m_device) throw_error("cannot create an Embree device (error {})", int(rtcGetDeviceError(nullptr)));
     rtcSetDeviceErrorFunction(m_device, &ErrorSink::callback, m_errors.get());
     try {
-        build(mesh);
+        build(mesh, width);
     } catch (...) {
         // The destructor does not run for a throwing constructor.
         if (m_scene) rtcReleaseScene(m_scene);
@@ -38,9 +39,9 @@ EmbreeScene::EmbreeScene(const TriangleMesh& mesh) : m_errors(std::make_unique<E
     }
 }
 
-void EmbreeScene::build(const TriangleMesh& mesh) {
+void EmbreeScene::build(const TriangleMesh& mesh, PacketWidth width) {
 #if defined(__x86_64__) || defined(__i386__)
-    m_packet16 = __builtin_cpu_supports("avx512f") != 0;
+    m_packet16 = width == PacketWidth::Native && __builtin_cpu_supports("avx512f") != 0;
 #endif
 
     m_scene = rtcNewScene(m_device);

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 using namespace tdf;
@@ -142,7 +144,7 @@ TEST(Trace, ShadingFieldsEqualTheFullGBuffersAndLeaveOutIdsAndDepth) {
 // The full-frame G-buffer is the renderer's tiles in lanes (trace_tile_lanes) written out
 // (stream_gbuffer_tile): every pixel is exactly one lane's and holds its bits, with and without
 // tangents and UVs, on tiles cut short by the image's edges (100 x 70 is no multiple of 64 x 4),
-// background included.
+// background included; with 8-wide packets (AVX2 machines' 4 x 2 blocks) too.
 TEST(Trace, TileLanesEqualTheFullGBufferBitForBit) {
     TriangleMesh full_mesh = make_uv_sphere(1.f, 48, 24);
     TriangleMesh no_tangents = full_mesh;
@@ -152,8 +154,11 @@ TEST(Trace, TileLanesEqualTheFullGBufferBitForBit) {
     no_uvs.uvs.clear();
     no_uvs.uv_triangles.clear();
     const auto bits = [](const float* a, const float* b) { return std::memcmp(a, b, sizeof(float)) == 0; };
-    for (const TriangleMesh* mesh : {&full_mesh, &no_tangents, &no_uvs}) {
-        const EmbreeScene scene(*mesh);
+    for (const auto& [mesh, width] : {std::pair{&full_mesh, PacketWidth::Native},
+                                      std::pair{&no_tangents, PacketWidth::Native},
+                                      std::pair{&no_uvs, PacketWidth::Native},
+                                      std::pair{&full_mesh, PacketWidth::Eight}}) {
+        const EmbreeScene scene(*mesh, width);
         const Camera cam = Camera::orbit(10, 40, 2.5f, 49.1f, 100, 70);
         const GBuffer g = trace_gbuffer(scene, *mesh, cam);
         std::vector<int> seen(g.pixel_count(), 0);
@@ -205,15 +210,17 @@ TEST(Trace, TileLanesEqualTheFullGBufferBitForBit) {
 // triangle corners at its barycentrics (written out here in scalar form, independently of the
 // vectorised lanes), background pixels exactly what clear_pixel leaves; a reused G-buffer holding
 // another view's values, on an image whose rows start off the 16-byte grid (67 wide: the
-// writer's scalar path), ends up with the bits of a fresh one.
+// writer's scalar path), ends up with the bits of a fresh one; with 8-wide packets too.
 TEST(Trace, FullGBufferHoldsThePlainInterpolationOfEachHit) {
     TriangleMesh sphere = make_uv_sphere(1.f, 48, 24);
     ASSERT_FALSE(sphere.tangents.empty());
     ASSERT_TRUE(sphere.has_uvs());
     // Mirrored corners here and there: the interpolated handedness changes sign within triangles.
     for (std::size_t k = 0; k < sphere.tangents.size(); k += 3) sphere.tangents[k].w = -1.f;
-    const EmbreeScene scene(sphere);
-    for (const auto& [width, height] : {std::pair{100, 70}, std::pair{67, 45}}) {
+    for (const auto& [width, height, packets] : {std::tuple{100, 70, PacketWidth::Native},
+                                                 std::tuple{67, 45, PacketWidth::Native},
+                                                 std::tuple{67, 45, PacketWidth::Eight}}) {
+        const EmbreeScene scene(sphere, packets);
         const Camera cam = Camera::orbit(10, 40, 2.5f, 49.1f, width, height);
         GBuffer g;
         trace_gbuffer(scene, sphere, Camera::orbit(200, -30, 3.f, 30.f, 120, 90), g);  // another view first

@@ -11,11 +11,15 @@
 
 namespace tdf {
 
+/// The width of the ray packets traced: the CPU's native one (16 with AVX-512, else 8), or 8 on
+/// any CPU, so that an AVX-512 machine also runs and tests the 8-wide path AVX2 machines take.
+enum class PacketWidth { Native, Eight };
+
 class EmbreeScene {
 public:
     /// Builds the BVH (medium quality). Throws tdf::Error when Embree reports an error, e.g.
     /// when the device cannot be created or memory runs out.
-    explicit EmbreeScene(const TriangleMesh& mesh);
+    explicit EmbreeScene(const TriangleMesh& mesh, PacketWidth width = PacketWidth::Native);
     ~EmbreeScene();
     EmbreeScene(const EmbreeScene&) = delete;
     EmbreeScene& operator=(const EmbreeScene&) = delete;
@@ -31,7 +35,7 @@ public:
     void throw_if_error(const char* during) const;
 
 private:
-    void build(const TriangleMesh& mesh);
+    void build(const TriangleMesh& mesh, PacketWidth width);
 
     struct ErrorSink;
     std::unique_ptr<ErrorSink> m_errors;
