@@ -78,46 +78,30 @@ private:
     RTCIntersectContext m_context;
 };
 
-// The bare baseline's loop: traces the packets of [x0, x1) x [y0, y1) and calls
-// on_lane(pixel_x, pixel_y, lane, rayhit) for every lane inside it (misses included: geomID is
+// Traces the packets of [x0, x1) x [y0, y1), block after block, 16 wide where the scene runs
+// them natively (AVX-512) and 8 wide otherwise, and calls on_packet(width, bx, by, valid, rayhit)
+// for each: `width` is std::integral_constant<int, N>, lane l lies at pixel (bx + l % kW,
+// by + l / kW), and valid[l] is 0 for the lanes outside the tile (misses have geomID
 // RTC_INVALID_GEOMETRY_ID).
-template <int N, typename OnLane>
+template <typename OnPacket>
 void trace_tile_packets(const EmbreeScene& scene, const Camera& camera, int x0, int y0, int x1, int y1,
-                        OnLane&& on_lane) {
-    using Shape = PacketShape<N>;
-    PacketRays<N> rays(camera);
-    alignas(64) typename Shape::RayHit packet;
-    alignas(64) int valid[N];
-    for (int by = y0; by < y1; by += Shape::kH)
-        for (int bx = x0; bx < x1; bx += Shape::kW) {
-            rays.trace(scene, bx, by, x1, y1, packet, valid);
-            for (int lane = 0; lane < N; ++lane)
-                if (valid[lane]) on_lane(bx + lane % Shape::kW, by + lane / Shape::kW, lane, packet);
-        }
-}
-
-// The same a packet at a time: on_packet(bx, by, valid, rayhit), for the G-buffer's lanes.
-template <int N, typename OnPacket>
-void trace_packets(const EmbreeScene& scene, const Camera& camera, int x0, int y0, int x1, int y1,
-                   OnPacket&& on_packet) {
-    using Shape = PacketShape<N>;
-    PacketRays<N> rays(camera);
-    alignas(64) typename Shape::RayHit packet;
-    alignas(64) int valid[N];
-    for (int by = y0; by < y1; by += Shape::kH)
-        for (int bx = x0; bx < x1; bx += Shape::kW) {
-            rays.trace(scene, bx, by, x1, y1, packet, valid);
-            on_packet(bx, by, valid, packet);
-        }
-}
-
-template <typename OnLane>
-void trace_tile_dispatch(const EmbreeScene& scene, const Camera& camera, int x0, int y0, int x1, int y1,
-                         OnLane&& on_lane) {
+                        OnPacket&& on_packet) {
+    const auto packets = [&](auto width) {
+        constexpr int N = decltype(width)::value;
+        using Shape = PacketShape<N>;
+        PacketRays<N> rays(camera);
+        alignas(64) typename Shape::RayHit packet;
+        alignas(64) int valid[N];
+        for (int by = y0; by < y1; by += Shape::kH)
+            for (int bx = x0; bx < x1; bx += Shape::kW) {
+                rays.trace(scene, bx, by, x1, y1, packet, valid);
+                on_packet(width, bx, by, valid, packet);
+            }
+    };
     if (scene.native_packet16())
-        trace_tile_packets<16>(scene, camera, x0, y0, x1, y1, on_lane);
+        packets(std::integral_constant<int, 16>{});
     else
-        trace_tile_packets<8>(scene, camera, x0, y0, x1, y1, on_lane);
+        packets(std::integral_constant<int, 8>{});
 }
 
 void check_inputs(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera) {
@@ -138,30 +122,24 @@ void trace_tile_lanes(const EmbreeScene& scene, const TriangleMesh& mesh, const 
     out.width = x1 - x0;
     out.height = y1 - y0;
     out.count = 0;
-    const auto packets = [&](auto width) {
-        constexpr int N = decltype(width)::value;
-        using Shape = PacketShape<N>;
-        trace_packets<N>(
-            scene, camera, x0, y0, x1, y1, [&](int bx, int by, const int* valid, const auto& packet) {
-                PacketHits hits;
-                hits.count = N;
-                hits.valid = valid;
-                hits.geom_id = packet.hit.geomID;
-                hits.prim_id = packet.hit.primID;
-                hits.u = packet.hit.u, hits.v = packet.hit.v, hits.t = packet.ray.tfar;
-                hits.dir_x = packet.ray.dir_x, hits.dir_y = packet.ray.dir_y, hits.dir_z = packet.ray.dir_z;
-                interpolate_packet(mesh, rd, hits, out, out.count);
-                for (int lane = 0; lane < N; ++lane)
-                    out.pixel[out.count + lane] =
-                        valid[lane] ? (by + lane / Shape::kW - y0) * out.width + (bx + lane % Shape::kW - x0)
-                                    : -1;
-                out.count += N;
-            });
-    };
-    if (scene.native_packet16())
-        packets(std::integral_constant<int, 16>{});
-    else
-        packets(std::integral_constant<int, 8>{});
+    trace_tile_packets(
+        scene, camera, x0, y0, x1, y1, [&](auto width, int bx, int by, const int* valid, const auto& packet) {
+            constexpr int N = decltype(width)::value;
+            using Shape = PacketShape<N>;
+            PacketHits hits;
+            hits.count = N;
+            hits.valid = valid;
+            hits.geom_id = packet.hit.geomID;
+            hits.prim_id = packet.hit.primID;
+            hits.u = packet.hit.u, hits.v = packet.hit.v, hits.t = packet.ray.tfar;
+            hits.dir_x = packet.ray.dir_x, hits.dir_y = packet.ray.dir_y, hits.dir_z = packet.ray.dir_z;
+            interpolate_packet(mesh, rd, hits, out, out.count);
+            for (int lane = 0; lane < N; ++lane)
+                out.pixel[out.count + lane] =
+                    valid[lane] ? (by + lane / Shape::kW - y0) * out.width + (bx + lane % Shape::kW - x0)
+                                : -1;
+            out.count += N;
+        });
 }
 
 void trace_gbuffer(const EmbreeScene& scene, const TriangleMesh& mesh, const Camera& camera, GBuffer& out,
@@ -198,13 +176,25 @@ std::size_t trace_closest_hits(const EmbreeScene& scene, const Camera& camera, s
     parallel_for_tiles(
         camera.width, camera.height, kTraceTileWidth, kTraceTileHeight, [&](int x0, int y0, int x1, int y1) {
             std::size_t hits = 0;
-            trace_tile_dispatch(
-                scene, camera, x0, y0, x1, y1, [&](int x, int y, int lane, const auto& packet) {
-                    const bool hit = packet.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
-                    t[std::size_t(y) * std::size_t(camera.width) + std::size_t(x)] =
-                        hit ? packet.ray.tfar[lane] : 0.f;
-                    hits += hit;
-                });
+            trace_tile_packets(scene,
+                               camera,
+                               x0,
+                               y0,
+                               x1,
+                               y1,
+                               [&](auto width, int bx, int by, const int* valid, const auto& packet) {
+                                   constexpr int N = decltype(width)::value;
+                                   using Shape = PacketShape<N>;
+                                   for (int lane = 0; lane < N; ++lane) {
+                                       if (!valid[lane]) continue;
+                                       const std::size_t x = std::size_t(bx + lane % Shape::kW),
+                                                         y = std::size_t(by + lane / Shape::kW);
+                                       const bool hit = packet.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
+                                       t[y * std::size_t(camera.width) + x] =
+                                           hit ? packet.ray.tfar[lane] : 0.f;
+                                       hits += hit;
+                                   }
+                               });
             tile_hits[std::size_t((y0 / kTraceTileHeight) * tiles_x + x0 / kTraceTileWidth)] = hits;
         });
     std::size_t total = 0;
