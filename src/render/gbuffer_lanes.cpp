@@ -5,6 +5,12 @@
 
 #include "hit_attributes.h"
 
+#include <vector>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 namespace tdf {
 
 void GBufferLanes::assign(const GBuffer& g) {
@@ -46,8 +52,65 @@ struct CornerRows {
     alignas(64) int triangle[kPacketMax];
 };
 
+#if defined(__SSE2__)
+// Four lanes' registers of up to four floats each (lanes i .. i + 3), transposed into the rows
+// row .. row + rows - 1 of those lanes.
+TDF_FORCE_INLINE void put_four(CornerRows& c, int row, int rows, int i, __m128 l0, __m128 l1, __m128 l2, __m128 l3) {
+    _MM_TRANSPOSE4_PS(l0, l1, l2, l3);
+    _mm_store_ps(&c.row[row][i], l0);
+    _mm_store_ps(&c.row[row + 1][i], l1);
+    if (rows > 2) _mm_store_ps(&c.row[row + 2][i], l2);
+    if (rows > 3) _mm_store_ps(&c.row[row + 3][i], l3);
+}
+
+// A Vec3f's three floats and one more (the next element's first, unused): one load. The array's
+// last element has no next; it is assembled from its three floats.
+struct Vec3Loader {
+    const Vec3f* data;
+    std::size_t last;
+    explicit Vec3Loader(const std::vector<Vec3f>& v) : data(v.data()), last(v.size() - 1) {}
+    TDF_FORCE_INLINE __m128 operator()(int index) const {
+        const Vec3f& p = data[index];
+        if (__builtin_expect(std::size_t(index) < last, 1)) return _mm_loadu_ps(&p.x);
+        return _mm_setr_ps(p.x, p.y, p.z, 0.f);
+    }
+};
+#endif
+
 template <bool Tangents, bool Uvs>
 TDF_FORCE_INLINE void gather_corners(const TriangleMesh& mesh, CornerRows& c, int count) {
+#if defined(__SSE2__)
+    // Four lanes at a time: each corner's attribute loaded whole into a register, four lanes'
+    // transposed into rows (a quarter of the scalar copy's stores; count is 8 or 16).
+    const Vec3Loader positions(mesh.positions), normals(mesh.normals);
+    for (int i = 0; i < count; i += 4) {
+        Vec3i tri[4], tt[4], ut[4];
+        for (int j = 0; j < 4; ++j) {
+            const std::size_t f = std::size_t(c.hit[i + j] ? c.triangle[i + j] : 0);
+            tri[j] = mesh.triangles[f];
+            if (Tangents) tt[j] = mesh.tangent_triangles[f];
+            if (Uvs) ut[j] = mesh.uv_triangles[f];
+        }
+        for (int k = 0; k < 3; ++k) {
+            put_four(c, CornerRows::kPosition + 3 * k, 3, i, positions(tri[0][k]), positions(tri[1][k]),
+                     positions(tri[2][k]), positions(tri[3][k]));
+            put_four(c, CornerRows::kNormal + 3 * k, 3, i, normals(tri[0][k]), normals(tri[1][k]),
+                     normals(tri[2][k]), normals(tri[3][k]));
+            if (Tangents) {
+                const auto t = [&](int j) { return _mm_loadu_ps(&mesh.tangents[std::size_t(tt[j][k])].x); };
+                put_four(c, CornerRows::kTangent + 4 * k, 4, i, t(0), t(1), t(2), t(3));
+            }
+        }
+        if (Uvs) {
+            const auto at = [&](int j, int k) { return reinterpret_cast<const __m64*>(&mesh.uvs[std::size_t(ut[j][k])]); };
+            const auto uv = [&](int j, int k) { return _mm_loadl_pi(_mm_setzero_ps(), at(j, k)); };
+            // (u, v) of corners k0 and k1
+            const auto two = [&](int j, int k0, int k1) { return _mm_loadh_pi(uv(j, k0), at(j, k1)); };
+            put_four(c, CornerRows::kUv, 4, i, two(0, 0, 1), two(1, 0, 1), two(2, 0, 1), two(3, 0, 1));
+            put_four(c, CornerRows::kUv + 4, 2, i, uv(0, 2), uv(1, 2), uv(2, 2), uv(3, 2));
+        }
+    }
+#else
     for (int i = 0; i < count; ++i) {
         // Lanes that missed read triangle 0, whose results they then discard.
         const std::size_t f = std::size_t(c.hit[i] ? c.triangle[i] : 0);
@@ -76,6 +139,7 @@ TDF_FORCE_INLINE void gather_corners(const TriangleMesh& mesh, CornerRows& c, in
             }
         }
     }
+#endif
 }
 
 template <bool Tangents, bool Uvs>
