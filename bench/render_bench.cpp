@@ -94,7 +94,7 @@ void gbuffer(benchmark::State& state, GBufferFields fields) {
     }
     set_rays(state);
 }
-// The full-frame G-buffer with every attribute (80 bytes a pixel: the evaluation, tests, tools).
+// The full-frame G-buffer with every attribute (84 bytes a pixel: the evaluation, tests, tools).
 void BM_GBuffer(benchmark::State& state) { gbuffer(state, GBufferFields::All); }
 // The trainer's views: no triangle ids, barycentrics or depth (68 bytes a pixel).
 void BM_GBufferShading(benchmark::State& state) { gbuffer(state, GBufferFields::Shading); }

@@ -22,7 +22,7 @@ using PixelArray = std::vector<T, DefaultInitAllocator<T>>;
 
 /// Which attributes a G-buffer holds. `Shading` leaves out the hit's triangle, barycentrics and
 /// depth (those vectors stay empty): what an optimizer that only looks the maps up and shades
-/// reads, 16 of the 80 bytes a pixel not written.
+/// reads, 16 of the 84 bytes a pixel not written.
 enum class GBufferFields { All, Shading };
 
 struct GBuffer {
