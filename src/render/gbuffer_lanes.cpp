@@ -86,6 +86,7 @@ TDF_FORCE_INLINE void gather_corners(const TriangleMesh& mesh, CornerRows& c, in
     for (int i = 0; i < count; i += 4) {
         Vec3i tri[4], tt[4], ut[4];
         for (int j = 0; j < 4; ++j) {
+            // Lanes that missed read triangle 0, whose results they then discard.
             const std::size_t f = std::size_t(c.hit[i + j] ? c.triangle[i + j] : 0);
             tri[j] = mesh.triangles[f];
             if (Tangents) tt[j] = mesh.tangent_triangles[f];
